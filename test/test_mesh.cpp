@@ -1,0 +1,373 @@
+// Tests of the mesh model (include/hom/mesh/): structured meshes, topology,
+// p-elevation with shared nodes, classification, coloring, the linear
+// sub-mesh and the ideal mesh.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+
+#include <Eigen/Dense>
+
+#include "hom/mesh/coloring.hpp"
+#include "hom/mesh/elevate.hpp"
+#include "hom/mesh/mesh.hpp"
+#include "hom/mesh/structured.hpp"
+#include "hom/mesh/sub_mesh.hpp"
+#include "hom/mesh/topology.hpp"
+#include "hom/nodes/equispaced.hpp"
+#include "hom/quadrature/quadrature_policy.hpp"
+
+using namespace hom;
+
+#define HOM_FAMILIES Simplex<2>, Simplex<3>, Cube<2>, Cube<3>
+
+namespace {
+
+template <ElementFamily F>
+std::array<int, F::dim> cells() {
+  if constexpr (F::dim == 2)
+    return {3, 2};
+  else
+    return {2, 2, 1};
+}
+
+// Smooth analytic map of the unit box onto a curved domain (injective:
+// a small perturbation of the identity).
+template <int D>
+Eigen::Matrix<double, D, 1> bend(const Eigen::Matrix<double, D, 1>& x) {
+  Eigen::Matrix<double, D, 1> y = x;
+  y[0] += 0.08 * std::sin(2.0 * x[1] + 0.5);
+  y[1] += 0.06 * std::cos(1.5 * x[0]) * (1.0 + x[0]);
+  if constexpr (D == 3) y[2] += 0.05 * std::sin(x[0] + x[1]) + 0.04 * x[2] * x[0];
+  return y;
+}
+
+template <class MeshT>
+void apply_bend(MeshT& m) {
+  for (int i = 0; i < m.num_nodes(); ++i) m.node(i) = bend<MeshT::space_dim>(m.node(i));
+}
+
+template <ElementFamily F>
+typename F::Point random_reference_point(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  typename F::Point x;
+  if constexpr (F::is_simplex) {
+    do {
+      for (int k = 0; k < F::dim; ++k) x[k] = u(rng);
+    } while (x.sum() > 1.0);
+  } else {
+    for (int k = 0; k < F::dim; ++k) x[k] = 2.0 * u(rng) - 1.0;
+  }
+  return x;
+}
+
+// Volume of a mesh: sum over elements of the integral of det D phi.
+template <class MeshT>
+double volume(const MeshT& m) {
+  using F = typename MeshT::family;
+  const auto& rule = cached_gauss_rule<F>(3 * m.degree() + 2);
+  const auto grads = m.basis().gradients(rule.points);
+  double v = 0;
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const auto X = m.element_coordinates(e);
+    for (int q = 0; q < rule.size(); ++q) {
+      Eigen::Matrix<double, F::dim, F::dim> J;
+      for (int k = 0; k < F::dim; ++k) J.col(k) = X * grads[k].row(q).transpose();
+      v += rule.weights[q] * J.determinant();
+    }
+  }
+  return v;
+}
+
+long nodes_formula_2d(bool simplex, long V, long E, long F, int p) {
+  return V + E * (p - 1) + F * (simplex ? long(p - 1) * (p - 2) / 2 : long(p - 1) * (p - 1));
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("structured mesh: counts, orientation, volume, Euler characteristic", F, HOM_FAMILIES) {
+  const auto n = cells<F>();
+  const auto m = structured_mesh<F>(n);
+  int cells_total = 1, points = 1;
+  for (int a = 0; a < F::dim; ++a) {
+    cells_total *= n[a];
+    points *= n[a] + 1;
+  }
+  const int per_cell = F::is_simplex ? (F::dim == 2 ? 2 : 6) : 1;
+  CHECK(m.num_elements() == cells_total * per_cell);
+  CHECK(m.num_nodes() == points);
+  CHECK(volume(m) == doctest::Approx(1.0).epsilon(1e-13));
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const typename F::Point c = F::is_simplex ? F::Point::Constant(1.0 / (F::dim + 1)) : F::Point::Zero();
+    CHECK(m.jacobian(e, c).determinant() > 0);
+  }
+  const Topology<F> topo(m);
+  CHECK(topo.euler_characteristic() == 1);  // a box is contractible
+  CHECK(topo.num_vertices() == points);
+  // Boundary facets: the structured count, and the generator classified them all.
+  long boundary_cells = 0;
+  for (int a = 0; a < F::dim; ++a) {
+    long side = 1;
+    for (int b = 0; b < F::dim; ++b)
+      if (b != a) side *= n[b];
+    boundary_cells += 2 * side;
+  }
+  const long facets_per_cell_side = F::is_simplex && F::dim == 3 ? 2 : 1;
+  CHECK(long(topo.boundary_facets().size()) == boundary_cells * facets_per_cell_side);
+  CHECK(m.boundary_facets().size() == topo.boundary_facets().size());
+}
+
+TEST_CASE("topology counts of structured triangle and tetrahedron meshes") {
+  const auto t = structured_mesh<Simplex<2>>({4, 3});
+  const Topology<Simplex<2>> tt(t);
+  CHECK(tt.num_edges() == 4 * 4 + 3 * 5 + 12);  // horizontal + vertical + diagonals
+  const auto h = structured_mesh<Cube<3>>({2, 3, 4});
+  const Topology<Cube<3>> th(h);
+  CHECK(th.num_edges() == 2 * 4 * 5 + 3 * 3 * 5 + 4 * 3 * 4);
+  CHECK(th.num_faces() == 3 * 3 * 4 + 4 * 2 * 4 + 5 * 2 * 3);
+}
+
+TEST_CASE_TEMPLATE("topology: interior facets are seen with opposite orientations, face orientation codes", F,
+                   HOM_FAMILIES) {
+  auto m = structured_mesh<F>(cells<F>());
+  const Topology<F> topo(m);
+  constexpr int nf = facet_num_vertices<F>;
+  for (int i = 0; i < topo.num_facets_total(); ++i) {
+    const auto refs = topo.facet_elements(i);
+    REQUIRE(refs.size() >= 1);
+    if (refs.size() < 2) continue;
+    // Outward vertex cycles of the two sides.
+    std::array<std::array<int, nf>, 2> cyc;
+    for (int s = 0; s < 2; ++s) {
+      const auto lv = facet_vertices<F>(refs[s].local);
+      for (int k = 0; k < nf; ++k) cyc[s][k] = m.vertex(refs[s].element, lv[k]);
+    }
+    // cyc[1] reversed must be a rotation of cyc[0].
+    std::array<int, nf> rev;
+    for (int k = 0; k < nf; ++k) rev[k] = cyc[1][nf - 1 - k];
+    bool rotation = false;
+    if (nf == 2) CHECK(rev == cyc[0]);  // edges: exactly reversed
+    for (int r = 0; r < nf; ++r) {
+      bool same = true;
+      for (int k = 0; k < nf; ++k) same = same && rev[(k + r) % nf] == cyc[0][k];
+      rotation = rotation || same;
+    }
+    CHECK(rotation);
+  }
+  if constexpr (F::dim == 3) {
+    for (int e = 0; e < m.num_elements(); ++e)
+      for (int k = 0; k < num_facets<F>; ++k) {
+        const auto c = topo.faces()[topo.element_face(e, k)];
+        const auto o = topo.element_face_orientation(e, k);
+        std::array<int, nf> rebuilt = c;
+        if (o.reflected) std::reverse(rebuilt.begin() + 1, rebuilt.end());
+        const auto lv = facet_vertices<F>(k);
+        for (int i = 0; i < nf; ++i) CHECK(rebuilt[i] == m.vertex(e, lv[(o.rotation + i) % nf]));
+      }
+  }
+  for (int e = 0; e < m.num_elements(); ++e)
+    for (int k = 0; k < Topology<F>::num_local_edges; ++k) {
+      const auto ed = topo.edges()[topo.element_edge(e, k)];
+      const auto le = F::edges()[k];
+      const int a = m.vertex(e, le[0]), b = m.vertex(e, le[1]);
+      CHECK(ed[0] < ed[1]);
+      CHECK((topo.element_edge_sign(e, k) > 0 ? std::array{a, b} : std::array{b, a}) == ed);
+    }
+}
+
+TEST_CASE_TEMPLATE("elevation: shared nodes created once, node count formula", F, HOM_FAMILIES) {
+  const auto lin = structured_mesh<F>(cells<F>());
+  const Topology<F> topo(lin);
+  const long V = topo.num_vertices(), E = topo.num_edges(), C = lin.num_elements();
+  for (int p = 1; p <= (F::dim == 2 ? 6 : 4); ++p) {
+    const auto m = elevate(lin, p);
+    long expected;
+    if constexpr (F::dim == 2) {
+      expected = nodes_formula_2d(F::is_simplex, V, E, C, p);
+    } else {
+      const long Fc = topo.num_faces();
+      if (F::is_simplex)
+        expected = V + E * (p - 1) + Fc * long(p - 1) * (p - 2) / 2 + C * long(p - 1) * (p - 2) * (p - 3) / 6;
+      else
+        expected = V + E * (p - 1) + Fc * long(p - 1) * (p - 1) + C * long(p - 1) * (p - 1) * (p - 1);
+    }
+    CHECK(m.num_nodes() == expected);
+    // Every node referenced, no element references a node twice.
+    std::vector<int> used(m.num_nodes(), 0);
+    for (int e = 0; e < m.num_elements(); ++e) {
+      std::set<int> s(m.element(e).begin(), m.element(e).end());
+      CHECK(int(s.size()) == m.nodes_per_element());
+      for (int i : s) used[i] = 1;
+    }
+    CHECK(std::count(used.begin(), used.end(), 1) == m.num_nodes());
+    // Vertices keep their ids and positions.
+    for (int e = 0; e < m.num_elements(); ++e)
+      for (int v = 0; v < F::num_vertices; ++v) CHECK(m.vertex(e, v) == lin.vertex(e, v));
+  }
+}
+
+TEST_CASE_TEMPLATE("elevation reproduces a curved map and places shared nodes the same from every side", F,
+                   HOM_FAMILIES) {
+  std::mt19937 rng(7);
+  auto quad = elevate(structured_mesh<F>(cells<F>()), 2);
+  apply_bend(quad);  // a curved degree-2 mesh
+  for (int p : {3, 5}) {
+    const auto m = elevate(quad, p);
+    for (int e = 0; e < m.num_elements(); ++e)
+      for (int t = 0; t < 3; ++t) {
+        const auto xi = random_reference_point<F>(rng);
+        CHECK((m.map(e, xi) - quad.map(e, xi)).norm() < 1e-12);
+      }
+    // The node seen by element e at local i equals e's own map at that node.
+    const auto& ref = WarpBlend::points<F>(p);
+    for (int e = 0; e < m.num_elements(); ++e)
+      for (int i = 0; i < m.nodes_per_element(); ++i)
+        CHECK((m.node(m.element(e)[i]) - quad.map(e, ref[i])).norm() < 1e-13);
+  }
+  // Changing the node set keeps the map too.
+  const auto eq = change_degree<Equispaced>(quad, 4);
+  for (int e = 0; e < eq.num_elements(); ++e) {
+    const auto xi = random_reference_point<F>(rng);
+    CHECK((eq.map(e, xi) - quad.map(e, xi)).norm() < 1e-12);
+  }
+}
+
+TEST_CASE_TEMPLATE("elevation classifies new nodes on the box's sub-entities", F, HOM_FAMILIES) {
+  const auto lin = structured_mesh<F>(cells<F>());
+  const auto m = elevate(lin, 3);
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    detail::BoxState<F::dim> s{};
+    for (int a = 0; a < F::dim; ++a) {
+      const double x = m.node(i)[a];
+      s[a] = std::abs(x) < 1e-12 ? 0 : (std::abs(x - 1.0) < 1e-12 ? 1 : 2);
+    }
+    const int d = detail::box_entity_dim<F::dim>(s);
+    const auto& c = m.node_class(i);
+    REQUIRE(c.entity.has_value());
+    CHECK(c.entity->dim == d);
+    CHECK(c.entity->tag == detail::box_entity_tag<F::dim>(s));
+    CHECK(c.kind == (d == F::dim ? NodeKind::free : (d == 0 ? NodeKind::fixed : NodeKind::on_entity)));
+  }
+  // Boundary facets follow their elements, and their nodes lie on their side.
+  for (const auto& f : m.boundary_facets()) {
+    const auto ids = m.facet_node_ids(f);
+    CHECK(int(ids.size()) == facet_num_nodes<F>(3));
+    for (int id : ids) {
+      const auto& c = m.node_class(id);
+      REQUIRE(c.entity.has_value());
+      CHECK(c.entity->dim <= F::dim - 1);
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("coloring: no element holds two nodes of a color, no node is in two elements of a color", F,
+                   HOM_FAMILIES) {
+  const auto m = elevate(structured_mesh<F>(cells<F>()), 3);
+  const Topology<F> topo(m);
+  const auto nc = color_nodes(m, topo);
+  std::vector<int> color(m.num_nodes(), -1);
+  int colored = 0;
+  for (int c = 0; c < nc.num_colors(); ++c)
+    for (int n : nc.groups[c]) {
+      CHECK(color[n] == -1);
+      color[n] = c;
+      ++colored;
+    }
+  CHECK(colored == m.num_nodes());
+  CHECK(nc.num_colors() >= m.nodes_per_element());
+  for (int e = 0; e < m.num_elements(); ++e) {
+    std::set<int> seen;
+    for (int n : m.element(e)) CHECK(seen.insert(color[n]).second);
+  }
+  const auto ec = color_elements(m, topo);
+  std::vector<int> ecolor(m.num_elements(), -1);
+  for (int c = 0; c < ec.num_colors(); ++c)
+    for (int e : ec.groups[c]) ecolor[e] = c;
+  for (int n = 0; n < m.num_nodes(); ++n) {
+    std::set<int> seen;
+    for (int e : topo.node_elements(n)) CHECK(seen.insert(ecolor[e]).second);
+  }
+  // A subset (e.g. free nodes) is colored alone.
+  std::vector<int> free_nodes;
+  for (int n = 0; n < m.num_nodes(); ++n)
+    if (m.node_class(n).kind == NodeKind::free) free_nodes.push_back(n);
+  const auto fc = color_nodes(m, topo, free_nodes);
+  std::size_t total = 0;
+  for (const auto& g : fc.groups) total += g.size();
+  CHECK(total == free_nodes.size());
+}
+
+TEST_CASE_TEMPLATE("linear sub-mesh: shares the nodes, tiles the element, carries the ideal", F, HOM_FAMILIES) {
+  for (int p : {1, 2, 4}) {
+    auto m = elevate(structured_mesh<F>(cells<F>()), p);
+    auto sub = linear_sub_mesh(m);
+    const int per = F::dim == 2 ? p * p : p * p * p;
+    CHECK(sub.mesh.num_elements() == per * m.num_elements());
+    CHECK(sub.mesh.num_nodes() == m.num_nodes());
+    CHECK(volume(sub.mesh) == doctest::Approx(volume(m)).epsilon(1e-12));
+    // Straight mesh: ideal = nodes.
+    for (int e = 0; e < sub.mesh.num_elements(); ++e)
+      CHECK((sub.mesh.ideal_vertices(e) - sub.mesh.element_coordinates(e)).norm() < 1e-14);
+    // Curve the high-order mesh: the sub-mesh ideal stays the straight one,
+    // each sub-element's ideal is its parent's ideal sub-element.
+    apply_bend(m);
+    sub = linear_sub_mesh(m);
+    const auto split = linear_sub_elements<F>(p);
+    for (int s = 0; s < sub.mesh.num_elements(); ++s) {
+      const auto parent_ideal = m.ideal_element_coordinates(sub.parent[s]);
+      for (int k = 0; k < F::num_vertices; ++k)
+        CHECK((sub.mesh.ideal_vertices(s).col(k) - parent_ideal.col(split[sub.local[s]][k])).norm() < 1e-14);
+      CHECK((sub.mesh.element_coordinates(s).col(0) - m.node(m.element(sub.parent[s])[split[sub.local[s]][0]])).norm() ==
+            0.0);
+    }
+    // Move the sub-mesh and recover: the high-order nodes are the moved ones.
+    sub.mesh.nodes().array() += 0.01;
+    recover_from_sub_mesh(sub, m);
+    CHECK((m.nodes() - sub.mesh.nodes()).norm() == 0.0);
+  }
+}
+
+TEST_CASE_TEMPLATE("ideal mesh is a snapshot of the straight-sided mesh", F, HOM_FAMILIES) {
+  std::mt19937 rng(3);
+  auto m = elevate(structured_mesh<F>(cells<F>()), 3);
+  const auto straight = m;
+  apply_bend(m);
+  for (int e = 0; e < m.num_elements(); ++e) {
+    CHECK((m.ideal_element_coordinates(e) - straight.element_coordinates(e)).norm() < 1e-13);
+    const auto xi = random_reference_point<F>(rng);
+    CHECK((m.ideal_map(e, xi) - straight.map(e, xi)).norm() < 1e-13);
+  }
+  m.reset_ideal();
+  for (int e = 0; e < m.num_elements(); ++e)
+    for (int v = 0; v < F::num_vertices; ++v) CHECK((m.ideal_vertices(e).col(v) - m.node(m.vertex(e, v))).norm() == 0.0);
+  if constexpr (true) {
+    const auto ideal = m.straight_sided_ideal();
+    CHECK(ideal.size() == m.num_elements());
+  }
+}
+
+TEST_CASE("facet_nodes: corner order, rejection of non-facets") {
+  for (int p = 1; p <= 5; ++p) {
+    for (int f = 0; f < 6; ++f) {
+      const auto& n = facet_nodes<Cube<3>>(p, f);
+      CHECK(int(n.size()) == (p + 1) * (p + 1));
+      std::set<int> s(n.begin(), n.end());
+      CHECK(s.size() == n.size());
+    }
+    CHECK_THROWS_AS(facet_nodes<Cube<3>>(p, FacetVertices<Cube<3>>{0, 1, 6, 7}), std::invalid_argument);
+    CHECK_THROWS_AS(facet_nodes<Cube<2>>(p, FacetVertices<Cube<2>>{0, 2}), std::invalid_argument);
+  }
+}
+
+TEST_CASE("mesh constructor validates its input") {
+  Mesh<Simplex<2>>::Coordinates X(2, 3);
+  X << 0, 1, 0, 0, 0, 1;
+  Mesh<Simplex<2>>::Connectivity c(3, 1);
+  c << 0, 1, 3;
+  CHECK_THROWS_AS((Mesh<Simplex<2>>(1, X, c)), std::invalid_argument);
+  Mesh<Simplex<2>>::Connectivity c2(6, 1);
+  c2.setZero();
+  CHECK_THROWS_AS((Mesh<Simplex<2>>(1, X, c2)), std::invalid_argument);
+}
