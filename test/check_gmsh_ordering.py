@@ -21,7 +21,7 @@ GMSH_NAME = {"line": "Line", "triangle": "Triangle", "quadrilateral": "Quadrangl
 
 def main():
     out = subprocess.run([sys.argv[1], "orderings"], check=True, capture_output=True, text=True).stdout
-    gmsh.initialize(["", "-noenv"])
+    gmsh.initialize()
     gmsh.option.setNumber("General.Verbosity", 0)
     checked, failures = 0, []
     seen = set()

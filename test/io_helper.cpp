@@ -96,7 +96,7 @@ void write_vtu_case(const std::string& dir, const char* name, int p, std::ostrin
       first_sample = false;
       for (int k = 0; k < 3; ++k) json << (k ? ", " : "") << (k < F::dim ? xi[k] : 0.0);
       json << "], \"x\": [";
-      for (int k = 0; k < 3; ++k) json << (k ? ", " : "") << std::setprecision(17) << (k < F::dim ? x[k] : 0.0);
+      for (int k = 0; k < 3; ++k) json << (k ? ", " : "") << (k < F::dim ? x[k] : 0.0);
       json << "], \"field\": " << field << "}";
     }
   json << "]}";
@@ -104,7 +104,7 @@ void write_vtu_case(const std::string& dir, const char* name, int p, std::ostrin
 
 int vtu_cases(const std::string& dir) {
   std::ostringstream json;
-  json << "[\n";
+  json << std::setprecision(17) << "[\n";
   bool first = true;
   for (int p : {1, 2, 3, 4, 5, 7, 10}) {
     write_vtu_case<Simplex<2>>(dir, "triangle", p, json, first);

@@ -371,3 +371,41 @@ TEST_CASE("mesh constructor validates its input") {
   c2.setZero();
   CHECK_THROWS_AS((Mesh<Simplex<2>>(1, X, c2)), std::invalid_argument);
 }
+
+TEST_CASE_TEMPLATE("surface meshes (2D families in 3D): elevation, topology, sub-mesh", F, Simplex<2>, Cube<2>) {
+  const auto planar = structured_mesh<F>({3, 2});
+  typename Mesh<F, WarpBlend, 3>::Coordinates X(3, planar.num_nodes());
+  for (int i = 0; i < planar.num_nodes(); ++i) {
+    const auto x = planar.node(i);
+    X.col(i) << x[0], x[1], 0.2 * x[0] * x[1];  // a bilinear (ruled) surface
+  }
+  Mesh<F, WarpBlend, 3> s(1, X, planar.elements());
+  s.node_classes() = planar.node_classes();
+  s.entities() = planar.entities();
+  for (const auto& f : planar.boundary_facets()) s.boundary_facets().push_back(f);
+  const auto m = elevate(s, 4);
+  CHECK(Topology<F>(m).euler_characteristic() == 1);
+  std::mt19937 rng(1);
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const auto xi = random_reference_point<F>(rng);
+    CHECK((m.map(e, xi) - s.map(e, xi)).norm() < 1e-13);
+    CHECK(m.jacobian(e, xi).cols() == 2);
+  }
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const auto& c = m.node_class(i);
+    REQUIRE(c.entity.has_value());
+    // Interior nodes of a surface mesh stay on their surface.
+    if (c.entity->dim == 2) CHECK(c.kind == NodeKind::on_entity);
+  }
+  const auto sub = linear_sub_mesh(m);
+  CHECK(sub.mesh.num_elements() == 16 * m.num_elements());
+}
+
+TEST_CASE("physical tags of an element's entity") {
+  auto m = structured_mesh<Simplex<2>>({1, 1});
+  CHECK(m.physical_tags(EntityId{2, 1}).empty());
+  for (auto& en : m.entities())
+    if (en.id == EntityId{2, 1}) en.physical_tags = {4, 9};
+  CHECK(m.physical_tags(EntityId{2, m.element_entities()[0]}) == std::vector<int>{4, 9});
+  CHECK(m.physical_tags(EntityId{3, 1}).empty());
+}

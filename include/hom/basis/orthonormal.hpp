@@ -34,6 +34,7 @@
 ///   - cubes: lexicographic, first index fastest: i + (p+1) j + (p+1)^2 k.
 /// `modes(p)` returns the multi-index of every mode in this order.
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>

@@ -244,6 +244,14 @@ class Mesh {
     return nullptr;
   }
 
+  /// Physical tags of an entity (empty if it has none or is not listed);
+  /// an element's are physical_tags({dim, element_entities()[e]}).
+  const std::vector<int>& physical_tags(EntityId id) const {
+    static const std::vector<int> none;
+    const Entity* en = find_entity(id);
+    return en ? en->physical_tags : none;
+  }
+
   const std::vector<PhysicalGroup>& physical_groups() const { return physical_groups_; }
   std::vector<PhysicalGroup>& physical_groups() { return physical_groups_; }
 

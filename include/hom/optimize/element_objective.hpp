@@ -16,13 +16,17 @@
 /// Coordinates are flattened node-major: entry (a, i) of X (coordinate a of
 /// node i) has index a + Dim * i, the storage order of a column-major X.
 ///
-/// `project_hessian` replaces each quadrature point's Dim^2 x Dim^2 block by
-/// its positive semi-definite part (eigenvalues clamped at 0) before the pull
-/// back, so the element Hessian is positive semi-definite: the modification
-/// for indefinite Hessians used by the Newton solvers.
+/// `project_hessian` (HessianForm::projected) replaces each quadrature point's
+/// Dim^2 x Dim^2 block by its positive semi-definite part (eigenvalues clamped
+/// at 0) before the pull back, so the element Hessian is positive
+/// semi-definite: the modification for indefinite Hessians used by the Newton
+/// solvers. HessianForm::gauss_newton keeps only the g g^T term. The point
+/// data (ElementHessianData) also applies the element Hessian to a direction
+/// without forming it (apply_element_hessian), for matrix-free Newton-CG.
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -108,56 +112,174 @@ double element_objective_gradient(const Tabulation<Family>& tab,
   return f;
 }
 
-/// f_e, its gradient and its Hessian ((Dim n) x (Dim n), node-major).
+/// Which second-order model of f_e a Newton-type solver uses. With
+/// g = d eta / dJ_P and H_eta the measure's Hessian pulled back to J_P, the
+/// exact second derivative of f_e at quadrature point q in J_P coordinates is
+///     M_q = c_q [ g g^T + (eta - 1) H_eta ],
+/// and the element Hessian is sum_q G_q M_q G_q^T (nodes x coordinates, see
+/// element_objective_hessian). The forms:
+enum class HessianForm {
+  exact,         ///< M_q as above (indefinite in general): derivative checks
+  projected,     ///< M_q replaced by its positive semi-definite part (eigenvalues clamped at 0)
+  gauss_newton,  ///< c_q g g^T: the Gauss-Newton model of the least squares eq 4.10 (PSD, rank one per point)
+};
+
+/// Second-order data of f_e at its quadrature points: enough to apply the
+/// element Hessian to a direction, or to assemble it, without storing it.
+///   - gauss_newton: `u[q]` = sqrt(c_q) vec(d eta / d J_P), M_q = u u^T (Dim^2 numbers per point);
+///   - exact, projected: `M[q]` (Dim^4 numbers per point).
+template <int Dim>
+struct ElementHessianData {
+  using FlatVector = Eigen::Matrix<double, Dim * Dim, 1>;
+  using FlatMatrix = Eigen::Matrix<double, Dim * Dim, Dim * Dim>;
+  HessianForm form = HessianForm::exact;
+  std::vector<FlatVector> u;
+  std::vector<FlatMatrix> M;
+
+  /// M_q in every form.
+  FlatMatrix point_matrix(int q) const { return form == HessianForm::gauss_newton ? FlatMatrix(u[q] * u[q].transpose()) : M[q]; }
+};
+
+namespace detail {
+
+/// K with vec(J_P A) = K vec(J_P), K = A^T (x) I: K(a + D b, c + D d) = A(d, b) delta_ac.
+template <int D>
+Eigen::Matrix<double, D * D, D * D> right_product_matrix(const Eigen::Matrix<double, D, D>& A) {
+  Eigen::Matrix<double, D * D, D * D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
+  for (int b = 0; b < D; ++b)
+    for (int d = 0; d < D; ++d)
+      for (int a = 0; a < D; ++a) K(a + D * b, a + D * d) = A(d, b);
+  return K;
+}
+
+}  // namespace detail
+
+/// f_e, its gradient (Dim x n) and the second-order data of `form` at every
+/// quadrature point. The measure's Hessian is not evaluated for Gauss-Newton.
 template <ElementFamily Family, class Measure, DeterminantRegularization Reg>
-double element_objective_hessian(const Tabulation<Family>& tab,
-                                 const Eigen::Ref<const Eigen::Matrix<double, Family::dim, Eigen::Dynamic>>& X,
-                                 const IdealAtPoints<Family::dim>& ideal, const Measure& measure, const Reg& reg,
-                                 ElementGradient<Family::dim>& grad, Eigen::MatrixXd& hess, bool project_hessian) {
+double element_hessian_data(const Tabulation<Family>& tab,
+                            const Eigen::Ref<const Eigen::Matrix<double, Family::dim, Eigen::Dynamic>>& X,
+                            const IdealAtPoints<Family::dim>& ideal, const Measure& measure, const Reg& reg,
+                            HessianForm form, ElementGradient<Family::dim>& grad, ElementHessianData<Family::dim>& data) {
   constexpr int D = Family::dim;
   constexpr int D2 = D * D;
   using Mat = Eigen::Matrix<double, D, D>;
   using Mat2 = Eigen::Matrix<double, D2, D2>;
   const int nq = tab.num_points();
-  const int n = tab.num_nodes();
   const Eigen::Matrix<double, D, Eigen::Dynamic> JP = X * tab.shape_gradients;
   Eigen::Matrix<double, D, Eigen::Dynamic> P(D, D * nq);
-  // Per quadrature point, the Hessian in J_P = X G_q coordinates (vec column-major).
-  std::vector<Mat2> M(nq);
+  data.form = form;
+  if (form == HessianForm::gauss_newton) {
+    data.u.resize(nq);
+    data.M.clear();
+  } else {
+    data.M.resize(nq);
+    data.u.clear();
+  }
   double f = 0.0;
   for (int q = 0; q < nq; ++q) {
     const Mat& A = ideal.inverse_jacobian[q];
+    const double c = ideal.weight[q];
+    const Mat J = JP.template middleCols<D>(q * D) * A;
     Mat g;
     Mat2 h;
-    const double eta = measure.value_gradient_hessian(Mat(JP.template middleCols<D>(q * D) * A), reg, g, h);
+    const double eta = form == HessianForm::gauss_newton ? measure.value_gradient(J, reg, g)
+                                                         : measure.value_gradient_hessian(J, reg, g, h);
     const double r = eta - 1.0;
-    const double c = ideal.weight[q];
     f += 0.5 * c * r * r;
     const Mat gp = g * A.transpose();  // d eta / d J_P
     P.template middleCols<D>(q * D) = (c * r) * gp;
-    // vec(J) = K vec(J_P), K = A^T (x) I:  K(a + D b, c + D d) = A(d, b) delta_ac.
-    Mat2 K = Mat2::Zero();
-    for (int b = 0; b < D; ++b)
-      for (int d = 0; d < D; ++d)
-        for (int a = 0; a < D; ++a) K(a + D * b, a + D * d) = A(d, b);
     const Eigen::Map<const Eigen::Matrix<double, D2, 1>> gv(gp.data());
-    Mat2 Mq = c * (gv * gv.transpose() + r * (K.transpose() * h * K));
-    if (project_hessian) Mq = detail::psd_part<D2>(Mq);
-    M[q] = Mq;
+    if (form == HessianForm::gauss_newton) {
+      data.u[q] = std::sqrt(c) * gv;
+    } else {
+      const Mat2 K = detail::right_product_matrix<D>(A);
+      Mat2 Mq = c * (gv * gv.transpose() + r * (K.transpose() * h * K));
+      if (form == HessianForm::projected) Mq = detail::psd_part<D2>(Mq);
+      data.M[q] = Mq;
+    }
   }
   grad.noalias() = P * tab.shape_gradients.transpose();
+  return f;
+}
 
-  // H[(a,i),(c,j)] = sum_q sum_{b,d} G_q(i,b) M_q(a + D b, c + D d) G_q(j,d):
-  // for each coordinate pair (a, c), one product G * blockdiag_q(M_q[a.,c.]) * G^T.
+/// out = H_e V: the element Hessian (of data's form) applied to the direction V
+/// (Dim x n, same layout as X), without forming H_e:
+///     dJ_q = V G_q,   S_q = unvec(M_q vec(dJ_q)),   out = sum_q S_q G_q^T.
+template <ElementFamily Family>
+void apply_element_hessian(const Tabulation<Family>& tab, const ElementHessianData<Family::dim>& data,
+                           const Eigen::Ref<const Eigen::Matrix<double, Family::dim, Eigen::Dynamic>>& V,
+                           Eigen::Matrix<double, Family::dim, Eigen::Dynamic>& out) {
+  constexpr int D = Family::dim;
+  constexpr int D2 = D * D;
+  const int nq = tab.num_points();
+  Eigen::Matrix<double, D, Eigen::Dynamic> S = V * tab.shape_gradients;  // dJ_q, then S_q in place
+  for (int q = 0; q < nq; ++q) {
+    Eigen::Map<Eigen::Matrix<double, D2, 1>> s(S.data() + q * D2);
+    if (data.form == HessianForm::gauss_newton)
+      s = data.u[q] * data.u[q].dot(s);
+    else
+      s = (data.M[q] * s).eval();
+  }
+  out.noalias() = S * tab.shape_gradients.transpose();
+}
+
+/// The Dim x Dim diagonal blocks of H_e, one per node: column block i of the
+/// result (Dim x (Dim n)) is d^2 f_e / dx_i^2 (for a nodal block-Jacobi preconditioner).
+template <ElementFamily Family>
+void element_hessian_diagonal_blocks(const Tabulation<Family>& tab, const ElementHessianData<Family::dim>& data,
+                                     Eigen::Matrix<double, Family::dim, Eigen::Dynamic>& blocks) {
+  constexpr int D = Family::dim;
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Vec = Eigen::Matrix<double, D, 1>;
+  const int nq = tab.num_points();
+  const int n = tab.num_nodes();
+  blocks.setZero(D, D * n);
+  for (int q = 0; q < nq; ++q) {
+    const auto Gq = tab.shape_gradients.template middleCols<D>(q * D);  // n x D
+    if (data.form == HessianForm::gauss_newton) {
+      // H_ii += v v^T with v = U_q G_q(i,:)^T, U_q = unvec(u_q).
+      const Eigen::Map<const Mat> U(data.u[q].data());
+      const Eigen::Matrix<double, D, Eigen::Dynamic> W = U * Gq.transpose();
+      for (int i = 0; i < n; ++i) blocks.template middleCols<D>(i * D).noalias() += W.col(i) * W.col(i).transpose();
+    } else {
+      const auto& Mq = data.M[q];
+      for (int i = 0; i < n; ++i) {
+        const Vec gi = Gq.row(i).transpose();
+        Mat Bi;
+        for (int a = 0; a < D; ++a)
+          for (int c = 0; c < D; ++c) {
+            double s = 0.0;
+            for (int b = 0; b < D; ++b)
+              for (int d = 0; d < D; ++d) s += gi[b] * Mq(a + D * b, c + D * d) * gi[d];
+            Bi(a, c) = s;
+          }
+        blocks.template middleCols<D>(i * D) += Bi;
+      }
+    }
+  }
+}
+
+/// The dense element Hessian ((Dim n) x (Dim n), node-major) from its point data:
+///     H[(a,i),(c,j)] = sum_q sum_{b,d} G_q(i,b) M_q(a + D b, c + D d) G_q(j,d),
+/// for each coordinate pair (a, c) one product G * blockdiag_q(M_q[a.,c.]) * G^T.
+template <ElementFamily Family>
+void assemble_element_hessian(const Tabulation<Family>& tab, const ElementHessianData<Family::dim>& data,
+                              Eigen::MatrixXd& hess) {
+  constexpr int D = Family::dim;
+  using Mat = Eigen::Matrix<double, D, D>;
+  const int nq = tab.num_points();
+  const int n = tab.num_nodes();
   hess.setZero(D * n, D * n);
   Eigen::MatrixXd B(n, D * nq);
   Eigen::MatrixXd Hac(n, n);
   for (int a = 0; a < D; ++a)
     for (int c = a; c < D; ++c) {
       for (int q = 0; q < nq; ++q) {
+        const auto Mq = data.point_matrix(q);
         Mat block;
         for (int b = 0; b < D; ++b)
-          for (int d = 0; d < D; ++d) block(b, d) = M[q](a + D * b, c + D * d);
+          for (int d = 0; d < D; ++d) block(b, d) = Mq(a + D * b, c + D * d);
         B.template middleCols<D>(q * D).noalias() = tab.shape_gradients.template middleCols<D>(q * D) * block;
       }
       Hac.noalias() = B * tab.shape_gradients.transpose();
@@ -167,7 +289,29 @@ double element_objective_hessian(const Tabulation<Family>& tab,
           hess(c + D * j, a + D * i) = Hac(i, j);
         }
     }
+}
+
+/// f_e, its gradient and its Hessian ((Dim n) x (Dim n), node-major) in the given form.
+template <ElementFamily Family, class Measure, DeterminantRegularization Reg>
+double element_objective_hessian(const Tabulation<Family>& tab,
+                                 const Eigen::Ref<const Eigen::Matrix<double, Family::dim, Eigen::Dynamic>>& X,
+                                 const IdealAtPoints<Family::dim>& ideal, const Measure& measure, const Reg& reg,
+                                 ElementGradient<Family::dim>& grad, Eigen::MatrixXd& hess, HessianForm form) {
+  ElementHessianData<Family::dim> data;
+  const double f = element_hessian_data<Family>(tab, X, ideal, measure, reg, form, grad, data);
+  assemble_element_hessian<Family>(tab, data, hess);
   return f;
+}
+
+/// f_e, its gradient and its Hessian ((Dim n) x (Dim n), node-major);
+/// `project_hessian` selects HessianForm::projected instead of exact.
+template <ElementFamily Family, class Measure, DeterminantRegularization Reg>
+double element_objective_hessian(const Tabulation<Family>& tab,
+                                 const Eigen::Ref<const Eigen::Matrix<double, Family::dim, Eigen::Dynamic>>& X,
+                                 const IdealAtPoints<Family::dim>& ideal, const Measure& measure, const Reg& reg,
+                                 ElementGradient<Family::dim>& grad, Eigen::MatrixXd& hess, bool project_hessian) {
+  return element_objective_hessian<Family>(tab, X, ideal, measure, reg, grad, hess,
+                                           project_hessian ? HessianForm::projected : HessianForm::exact);
 }
 
 }  // namespace hom

@@ -1,0 +1,208 @@
+#pragma once
+/// @file gauss_seidel.hpp
+/// Non-linear Gauss-Seidel for eq 4.11 (appendix B): one free node at a time,
+///
+///     x_i^{k+1} = x_i^k - alpha_i^k [grad^2_ii f^(x_i^k)]^{-1} grad_i f^(x_i^k),        (eq B.1)
+///
+/// where f^ is the local merit function of eq B.2, the contribution of the
+/// elements that contain node i (the node's sub-mesh, remark B.1). By eqs
+/// B.3-B.5 its gradient, Hessian and sufficient-decrease test are those of the
+/// global f, at the cost of the node's elements only. hom's f^ keeps the 1/2
+/// of eq 4.10, which changes neither the Newton step nor the Armijo test.
+///
+///   - The Dim x Dim nodal Hessian is the exact one; if it is not positive
+///     definite, its eigenvalues are replaced by max(|lambda|, eigenvalue_floor *
+///     max|lambda|) (a modified Newton step, always a descent direction).
+///   - alpha_i^k by the backtracking line search of algorithm B.1 with
+///     alpha = 1, rho = 0.5, c = 1e-4 on f^ (eq B.5); trials with f^ = +inf (a
+///     valid element under sigma_0 would become invalid) are rejected, so the
+///     consistency of section 4.2.2 holds node by node. A node whose line
+///     search fails stays put.
+///   - Incremental Jacobians: the Jacobians J_P,q = X G_q of every element at
+///     its quadrature points are cached (Dim x Dim per point, recomputed from
+///     the coordinates at the start of each sweep). Moving node i (local node l
+///     of element e) by dx changes each of them by the rank-one term
+///     dx G_q(l, :), so a trial and an accepted move cost O(nq Dim^2) per
+///     element, not a product with all the element's nodes.
+///   - Parallel sweeps: the free nodes are colored so that no element
+///     contains two nodes of one color (OptimizationProblem::free_node_coloring);
+///     colors are swept in order and the nodes of one color are updated
+///     concurrently. Nodes of a color touch disjoint elements, so a sweep's
+///     result is that of the sequential sweep in color order, whatever the
+///     number of threads.
+/// One outer iteration (solver.hpp) is one sweep over all free nodes.
+
+#include <algorithm>
+#include <cmath>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "hom/detail/parallel.hpp"
+#include "hom/optimize/problem.hpp"
+#include "hom/optimize/solver.hpp"
+
+namespace hom {
+
+struct GaussSeidel {
+  static constexpr std::string_view name = "gauss-seidel";
+
+  /// Algorithm B.1: alpha = 1, rho = 0.5, c = 1e-4.
+  LineSearch line_search{1.0, 0.5, 1e-4, 30};
+  double eigenvalue_floor = 1e-8;
+
+  template <ElementFamily Family, class Measure>
+  SolverResult solve(OptimizationProblem<Family, Measure>& problem, const SolverOptions& options) const {
+    Step<OptimizationProblem<Family, Measure>> step{*this, problem.free_node_coloring(), {}};
+    const detail::SerialEigenScope serial_eigen;
+    return detail::run_outer_loop(problem, options, name, step);
+  }
+
+ private:
+  template <class Problem>
+  struct Step {
+    static constexpr int D = Problem::dim;
+    using Mat = Eigen::Matrix<double, D, D>;
+    using Vec = Eigen::Matrix<double, D, 1>;
+    using Mat2 = Eigen::Matrix<double, D * D, D * D>;
+    const GaussSeidel& s;
+    Coloring colors;
+    std::vector<Eigen::Matrix<double, D, Eigen::Dynamic>> jacobians;  // per element: J_P,q = X G_q, Dim x (Dim nq)
+
+    double evaluate(Problem& problem, Eigen::VectorXd& g) { return problem.value_gradient(problem.coordinates(), g); }
+
+    void refresh_jacobians(const Problem& problem) {
+      const int ne = problem.num_elements();
+      jacobians.resize(ne);
+      const auto& tab = problem.tabulation();
+      const auto& X = problem.coordinates();
+      HOM_PARALLEL_FOR(problem.threads())
+      for (int e = 0; e < ne; ++e) {
+        Eigen::Matrix<double, D, Eigen::Dynamic> Xe;
+        problem.element_coordinates(X, e, Xe);
+        jacobians[e].noalias() = Xe * tab.shape_gradients;
+      }
+    }
+
+    // f^ of eq B.2 for node `node` displaced by dx (dx = 0: current position).
+    double local_value(const Problem& problem, int node, const Vec& dx) const {
+      const auto& tab = problem.tabulation();
+      double f = 0.0;
+      for (const auto& inc : problem.incidences(node)) {
+        const auto& id = problem.ideal(inc.element);
+        const auto& JP = jacobians[inc.element];
+        const double fe = problem.with_regularization(inc.element, [&](const auto& reg) {
+          double sum = 0.0;
+          for (int q = 0; q < tab.num_points(); ++q) {
+            const Vec b = tab.shape_gradients.row(inc.local).template segment<D>(q * D).transpose();
+            const Mat J = (JP.template middleCols<D>(q * D) + dx * b.transpose()) * id.inverse_jacobian[q];
+            const double eta = problem.measure().value(J, reg);
+            sum += 0.5 * id.weight[q] * (eta - 1.0) * (eta - 1.0);
+          }
+          return sum;
+        });
+        f += fe;
+        if (!std::isfinite(f)) return f;
+      }
+      return f;
+    }
+
+    // f^, grad_i f^ and grad^2_ii f^ at the current position (eqs B.2-B.4):
+    // with w = A_q^T G_q(l,:)^T, d J / dx_a = e_a w^T, so
+    //   grad  = sum_q c_q r_q g_q w,
+    //   H(a,b) = sum_q c_q [ (g_q w)_a (g_q w)_b + r_q sum_{k,m} h_q(a + D k, b + D m) w_k w_m ].
+    double local_derivatives(const Problem& problem, int node, Vec& grad, Mat& hess) const {
+      const auto& tab = problem.tabulation();
+      double f = 0.0;
+      grad.setZero();
+      hess.setZero();
+      for (const auto& inc : problem.incidences(node)) {
+        const auto& id = problem.ideal(inc.element);
+        const auto& JP = jacobians[inc.element];
+        problem.with_regularization(inc.element, [&](const auto& reg) {
+          for (int q = 0; q < tab.num_points(); ++q) {
+            const Mat& A = id.inverse_jacobian[q];
+            const double c = id.weight[q];
+            const Vec b = tab.shape_gradients.row(inc.local).template segment<D>(q * D).transpose();
+            const Vec w = A.transpose() * b;
+            const Mat J = JP.template middleCols<D>(q * D) * A;
+            Mat g;
+            Mat2 h;
+            const double eta = problem.measure().value_gradient_hessian(J, reg, g, h);
+            const double r = eta - 1.0;
+            const Vec u = g * w;
+            f += 0.5 * c * r * r;
+            grad += (c * r) * u;
+            Mat hw;
+            for (int a = 0; a < D; ++a)
+              for (int bb = 0; bb < D; ++bb) {
+                double sum = 0.0;
+                for (int k = 0; k < D; ++k)
+                  for (int m = 0; m < D; ++m) sum += h(a + D * k, bb + D * m) * w[k] * w[m];
+                hw(a, bb) = sum;
+              }
+            hess += c * (u * u.transpose() + r * hw);
+          }
+          return 0.0;
+        });
+      }
+      return f;
+    }
+
+    // One node's modified Newton step with algorithm B.1; returns the number
+    // of backtracks, or -1 if the node did not move.
+    int relax_node(Problem& problem, int node) {
+      Vec grad;
+      Mat hess;
+      const double f0 = local_derivatives(problem, node, grad, hess);
+      if (!std::isfinite(f0) || !grad.allFinite() || !hess.allFinite() || grad.squaredNorm() == 0.0) return -1;
+      const Eigen::SelfAdjointEigenSolver<Mat> es(hess);
+      Vec lambda = es.eigenvalues().cwiseAbs();
+      const double top = lambda.maxCoeff();
+      if (!(top > 0.0)) return -1;
+      lambda = lambda.cwiseMax(s.eigenvalue_floor * top);
+      const Vec p = -(es.eigenvectors() * (es.eigenvectors().transpose() * grad).cwiseQuotient(lambda));
+      const double slope = grad.dot(p);
+      if (!(slope < 0.0)) return -1;
+      const auto ls = s.line_search.search([&](double alpha) { return local_value(problem, node, Vec(alpha * p)); }, f0, slope);
+      if (!ls.accepted) return -1;
+      const Vec dx = ls.step * p;
+      const auto& tab = problem.tabulation();
+      for (const auto& inc : problem.incidences(node)) {
+        auto& JP = jacobians[inc.element];
+        for (int q = 0; q < tab.num_points(); ++q)
+          JP.template middleCols<D>(q * D).noalias() +=
+              dx * tab.shape_gradients.row(inc.local).template segment<D>(q * D);
+      }
+      problem.coordinates().col(node) += dx;
+      return ls.backtracks;
+    }
+
+    detail::StepOutcome advance(Problem& problem, double f, const Eigen::VectorXd&) {
+      detail::StepOutcome out;
+      if (problem.num_free_nodes() == 0) return out;
+      refresh_jacobians(problem);
+      std::vector<int> result(problem.num_nodes(), -1);
+      for (const auto& group : colors.groups) {
+        const int size = int(group.size());
+        HOM_PARALLEL_FOR_DYNAMIC(problem.threads())
+        for (int k = 0; k < size; ++k) result[group[k]] = relax_node(problem, group[k]);
+      }
+      int moved = 0, backtracks = 0;
+      for (int node : problem.free_nodes())
+        if (result[node] >= 0) {
+          ++moved;
+          backtracks += result[node];
+        }
+      out.objective = problem.value(problem.coordinates());
+      out.success = moved > 0 && std::isfinite(out.objective);
+      out.step = double(moved) / problem.num_free_nodes();
+      out.inner = backtracks;
+      (void)f;
+      return out;
+    }
+  };
+};
+
+}  // namespace hom

@@ -1,0 +1,564 @@
+#pragma once
+/// @file problem.hpp
+/// The global mesh optimization problem of eq 4.11: minimize over the free
+/// node coordinates
+///
+///     f(x_1..x_nF; x_nF+1..x_nN) = 1/2 sum_e || M_delta_e phi_E_e - 1 ||^2_{E_e^I}     (eqs 4.9, 4.10)
+///
+/// with the fixed nodes (boundary nodes, already on the geometry) held in
+/// place. `OptimizationProblem` is independent of the Mesh class: it holds
+/// the node coordinates (Dim x N), the connectivity (n_p x nE, hom's local
+/// layout), a free-node mask, each element's ideal at the quadrature points
+/// (IdealAtPoints), the shared tabulation, the measure and an element-wise
+/// regularization delta_e. It evaluates, for any trial coordinates X,
+///   - f (value), the gradient over the free degrees of freedom,
+///   - the assembled sparse Hessian over the free dofs (exact, projected or
+///     Gauss-Newton, element_objective.hpp), and
+///   - a Hessian operator that applies the Hessian to a vector element by
+///     element without storing element Hessians (matrix-free Newton-CG).
+/// Free dofs are numbered node-major: dof a + Dim * k is coordinate a of the
+/// k-th free node (free nodes in ascending node id).
+///
+/// Regularization (section 4.2.2). delta_e is element-wise and constant while
+/// a solver takes one outer iteration. `update_regularization(state)` sets
+///     delta_e = element_regularization(alpha).delta   if element e is invalid
+///                                                     (det D phi_E <= 0 at some quadrature point),
+///     delta_e = 0                                      otherwise,
+/// where delta_e = 0 means sigma_0 (ClampedDeterminant, eq 3.8): f_e = +inf
+/// as soon as the element is invalid. Solvers call it at the start of every
+/// outer iteration, so
+///   - a line search, which rejects +inf, never accepts a step that makes a
+///     valid element invalid: the number of invalid elements never increases
+///     and an element valid at the start is valid at the end (consistency);
+///   - invalid elements see the smooth regularized measure (eq 3.5) and can
+///     be untangled; once every element is valid, delta = 0 everywhere and the
+///     optimization is the unregularized one (section 4.2.1).
+/// In hom's units (J = D phi_E relative to the ideal) the thesis's delta of
+/// eq 4.14 is the same constant sqrt(alpha^2 + alpha) for every element
+/// (see element_regularization()).
+///
+/// Parallelism: element loops run on `threads()` OpenMP threads; each element
+/// writes its own slot and every sum over elements is taken afterwards in a
+/// fixed order (per node, in element order), so results do not depend on the
+/// number of threads. A problem object is not meant to be evaluated from
+/// several threads at once (it caches the Hessian's sparsity pattern).
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+
+#include "hom/detail/parallel.hpp"
+#include "hom/measure/regularization.hpp"
+#include "hom/measure/shape_measure.hpp"
+#include "hom/mesh/coloring.hpp"
+#include "hom/optimize/element_objective.hpp"
+#include "hom/quality/tabulation.hpp"
+
+namespace hom {
+
+/// Per-element validity and quality of a configuration (what solvers watch).
+struct MeshState {
+  std::vector<char> valid;      ///< det D phi_E > 0 at every quadrature point
+  std::vector<double> quality;  ///< q_E = 1 / eta_E (def 3.6, eq 3.24) with sigma_0; 0 when invalid
+  int inverted = 0;             ///< number of invalid elements
+  double min_quality = 0.0;     ///< min_e q_E (0 if any element is invalid)
+
+  bool all_valid() const { return inverted == 0; }
+};
+
+/// Where a node appears: local node `local` of element `element`.
+struct NodeIncidence {
+  int element = 0;
+  int local = 0;
+};
+
+template <ElementFamily Family, class Measure = ShapeMeasure>
+class OptimizationProblem {
+ public:
+  static constexpr int dim = Family::dim;
+  using family = Family;
+  using measure_type = Measure;
+  using Coordinates = Eigen::Matrix<double, dim, Eigen::Dynamic>;
+  using Connectivity = Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic>;
+  using Ideal = IdealAtPoints<dim>;
+  using SparseMatrix = Eigen::SparseMatrix<double>;
+  using NodeMatrix = Eigen::Matrix<double, dim, dim>;
+
+  /// `x`: Dim x N node coordinates; `elements`: n_p x nE connectivity in the
+  /// local layout of `tab`; `free[i]`: node i moves; `ideals[e]`: element e's
+  /// ideal at the quadrature points of `tab` (ideal_at_points). `tab` must
+  /// outlive the problem (tabulation() caches live for the program).
+  OptimizationProblem(const Tabulation<Family>& tab, Coordinates x, Connectivity elements, std::vector<bool> free,
+                      std::vector<Ideal> ideals, Measure measure = {})
+      : tab_(&tab),
+        x_(std::move(x)),
+        elements_(std::move(elements)),
+        free_(std::move(free)),
+        ideals_(std::move(ideals)),
+        measure_(measure),
+        threads_(detail::resolve_threads(0)) {
+    const int n = tab.num_nodes();
+    if (elements_.rows() != n)
+      throw std::invalid_argument("hom::OptimizationProblem: connectivity has " + std::to_string(elements_.rows()) +
+                                  " rows, the tabulation " + std::to_string(n) + " nodes per element");
+    if (int(free_.size()) != x_.cols())
+      throw std::invalid_argument("hom::OptimizationProblem: free mask has " + std::to_string(free_.size()) +
+                                  " entries for " + std::to_string(x_.cols()) + " nodes");
+    if (int(ideals_.size()) != elements_.cols())
+      throw std::invalid_argument("hom::OptimizationProblem: " + std::to_string(ideals_.size()) + " ideals for " +
+                                  std::to_string(elements_.cols()) + " elements");
+    for (const auto& id : ideals_)
+      if (int(id.weight.size()) != tab.num_points())
+        throw std::invalid_argument("hom::OptimizationProblem: an ideal was tabulated with another quadrature rule");
+    for (Eigen::Index e = 0; e < elements_.cols(); ++e)
+      for (Eigen::Index i = 0; i < n; ++i)
+        if (elements_(i, e) < 0 || elements_(i, e) >= x_.cols())
+          throw std::invalid_argument("hom::OptimizationProblem: element " + std::to_string(e) + " refers to node " +
+                                      std::to_string(elements_(i, e)) + " of " + std::to_string(x_.cols()));
+    free_index_.assign(x_.cols(), -1);
+    for (int i = 0; i < int(x_.cols()); ++i)
+      if (free_[i]) {
+        free_index_[i] = int(free_nodes_.size());
+        free_nodes_.push_back(i);
+      }
+    build_incidences();
+    deltas_.assign(elements_.cols(), 0.0);
+  }
+
+  // --- sizes and data --------------------------------------------------------
+  int num_nodes() const { return int(x_.cols()); }
+  int num_elements() const { return int(elements_.cols()); }
+  int nodes_per_element() const { return int(elements_.rows()); }
+  int num_free_nodes() const { return int(free_nodes_.size()); }
+  int num_dofs() const { return dim * num_free_nodes(); }
+
+  const Tabulation<Family>& tabulation() const { return *tab_; }
+  const Measure& measure() const { return measure_; }
+  const Connectivity& elements() const { return elements_; }
+  const Ideal& ideal(int e) const { return ideals_[e]; }
+  bool is_free(int node) const { return free_[node]; }
+  /// Free node ids, ascending; free dof block k belongs to free_nodes()[k].
+  const std::vector<int>& free_nodes() const { return free_nodes_; }
+  /// Position of a free node in free_nodes() (precondition: is_free(node)).
+  int free_index(int node) const { return free_index_[node]; }
+  /// The (element, local node) pairs of a node, in element order.
+  std::span<const NodeIncidence> incidences(int node) const {
+    return {incidences_.data() + incidence_offsets_[node],
+            std::size_t(incidence_offsets_[node + 1] - incidence_offsets_[node])};
+  }
+
+  /// The current configuration (solvers move the free columns).
+  const Coordinates& coordinates() const { return x_; }
+  Coordinates& coordinates() { return x_; }
+
+  int threads() const { return threads_; }
+  /// threads <= 0: OpenMP's default.
+  void set_threads(int threads) { threads_ = detail::resolve_threads(threads); }
+
+  // --- regularization (section 4.2.2) ------------------------------------------
+  const std::vector<double>& deltas() const { return deltas_; }
+  void set_deltas(std::vector<double> d) {
+    if (int(d.size()) != num_elements()) throw std::invalid_argument("hom::OptimizationProblem::set_deltas: wrong size");
+    deltas_ = std::move(d);
+  }
+  double regularization_alpha() const { return alpha_; }
+  void set_regularization_alpha(double alpha) { alpha_ = alpha; }
+  /// delta_e = element_regularization(alpha).delta for the invalid elements of
+  /// `state`, 0 (sigma_0) for the valid ones. Returns the number regularized.
+  int update_regularization(const MeshState& state) {
+    const double delta = element_regularization(alpha_).delta;
+    int n = 0;
+    for (int e = 0; e < num_elements(); ++e) {
+      deltas_[e] = state.valid[e] ? 0.0 : delta;
+      n += !state.valid[e];
+    }
+    return n;
+  }
+  /// Calls fn(reg) with element e's regularization policy: RegularizedDeterminant
+  /// when delta_e > 0, ClampedDeterminant (sigma_0) otherwise.
+  template <class Fn>
+  decltype(auto) with_regularization(int e, Fn&& fn) const {
+    if (deltas_[e] > 0.0) return fn(RegularizedDeterminant{deltas_[e]});
+    return fn(ClampedDeterminant{});
+  }
+
+  // --- free dofs <-> coordinates ----------------------------------------------
+  void element_coordinates(const Coordinates& X, int e, Eigen::Matrix<double, dim, Eigen::Dynamic>& Xe) const {
+    const int n = nodes_per_element();
+    Xe.resize(dim, n);
+    for (int i = 0; i < n; ++i) Xe.col(i) = X.col(elements_(i, e));
+  }
+  Eigen::VectorXd free_vector(const Coordinates& X) const {
+    Eigen::VectorXd v(num_dofs());
+    for (int k = 0; k < num_free_nodes(); ++k) v.template segment<dim>(dim * k) = X.col(free_nodes_[k]);
+    return v;
+  }
+  /// X with its free nodes moved by alpha * p (p over the free dofs).
+  Coordinates displaced(const Coordinates& X, const Eigen::VectorXd& p, double alpha) const {
+    Coordinates Y = X;
+    for (int k = 0; k < num_free_nodes(); ++k) Y.col(free_nodes_[k]) += alpha * p.template segment<dim>(dim * k);
+    return Y;
+  }
+
+  // --- evaluation ----------------------------------------------------------
+  /// Validity and quality of every element at X (sigma_0, independent of delta).
+  MeshState status(const Coordinates& X) const {
+    constexpr int D = dim;
+    using Mat = Eigen::Matrix<double, D, D>;
+    const int ne = num_elements();
+    MeshState s;
+    s.valid.assign(ne, 1);
+    s.quality.assign(ne, 0.0);
+    const Tabulation<Family>& tab = *tab_;
+    HOM_PARALLEL_FOR_DYNAMIC(threads_)
+    for (int e = 0; e < ne; ++e) {
+      Eigen::Matrix<double, D, Eigen::Dynamic> Xe;
+      element_coordinates(X, e, Xe);
+      const Eigen::Matrix<double, D, Eigen::Dynamic> JP = Xe * tab.shape_gradients;
+      const Ideal& id = ideals_[e];
+      double integral = 0.0, volume = 0.0;
+      bool valid = true;
+      for (int q = 0; q < tab.num_points(); ++q) {
+        const double eta = measure_.value(Mat(JP.template middleCols<D>(q * D) * id.inverse_jacobian[q]), ClampedDeterminant{});
+        if (!std::isfinite(eta)) {
+          valid = false;
+          break;
+        }
+        integral += id.weight[q] * eta * eta;
+        volume += id.weight[q];
+      }
+      s.valid[e] = valid;
+      s.quality[e] = valid ? 1.0 / std::sqrt(integral / volume) : 0.0;  // eqs 3.20, 3.24
+    }
+    s.min_quality = ne > 0 ? 1.0 : 0.0;
+    for (int e = 0; e < ne; ++e) {
+      s.inverted += !s.valid[e];
+      s.min_quality = std::min(s.min_quality, s.quality[e]);
+    }
+    return s;
+  }
+
+  /// f at X with the current deltas; +inf if an element with delta = 0 is invalid.
+  double value(const Coordinates& X) const {
+    const int ne = num_elements();
+    std::vector<double> fe(ne);
+    const Tabulation<Family>& tab = *tab_;
+    HOM_PARALLEL_FOR_DYNAMIC(threads_)
+    for (int e = 0; e < ne; ++e) {
+      Eigen::Matrix<double, dim, Eigen::Dynamic> Xe;
+      element_coordinates(X, e, Xe);
+      fe[e] = with_regularization(e, [&](const auto& reg) { return element_objective<Family>(tab, Xe, ideals_[e], measure_, reg); });
+    }
+    return sum_in_order(fe);
+  }
+
+  /// f at X and its gradient over the free dofs (g is undefined when f = +inf).
+  double value_gradient(const Coordinates& X, Eigen::VectorXd& g) const {
+    const int ne = num_elements();
+    const int n = nodes_per_element();
+    std::vector<double> fe(ne);
+    Eigen::Matrix<double, dim, Eigen::Dynamic> Ge(dim, Eigen::Index(n) * ne);
+    const Tabulation<Family>& tab = *tab_;
+    HOM_PARALLEL_FOR_DYNAMIC(threads_)
+    for (int e = 0; e < ne; ++e) {
+      Eigen::Matrix<double, dim, Eigen::Dynamic> Xe;
+      ElementGradient<dim> grad;
+      element_coordinates(X, e, Xe);
+      fe[e] = with_regularization(
+          e, [&](const auto& reg) { return element_objective_gradient<Family>(tab, Xe, ideals_[e], measure_, reg, grad); });
+      Ge.middleCols(Eigen::Index(e) * n, n) = grad;
+    }
+    gather(Ge, g);
+    return sum_in_order(fe);
+  }
+
+  /// f, gradient and the Hessian over the free dofs (symmetric, full storage).
+  /// Elements are assembled color by color (no two elements of a color share a
+  /// node), so every matrix entry is summed in the same order on any number of threads.
+  double hessian(const Coordinates& X, HessianForm form, Eigen::VectorXd& g, SparseMatrix& H) const {
+    const detail::SerialEigenScope serial_eigen;
+    const HessianPattern& pat = pattern();
+    const int ne = num_elements();
+    const int n = nodes_per_element();
+    std::vector<double> fe(ne);
+    Eigen::Matrix<double, dim, Eigen::Dynamic> Ge(dim, Eigen::Index(n) * ne);
+    H = pat.matrix;
+    double* values = H.valuePtr();
+    const int* outer = H.outerIndexPtr();
+    std::fill(values, values + H.nonZeros(), 0.0);
+    const Tabulation<Family>& tab = *tab_;
+    for (const auto& group : pat.colors.groups) {
+      const int size = int(group.size());
+      HOM_PARALLEL_FOR_DYNAMIC(threads_)
+      for (int k = 0; k < size; ++k) {
+        const int e = group[k];
+        Eigen::Matrix<double, dim, Eigen::Dynamic> Xe;
+        ElementGradient<dim> grad;
+        Eigen::MatrixXd He;
+        element_coordinates(X, e, Xe);
+        fe[e] = with_regularization(e, [&](const auto& reg) {
+          return element_objective_hessian<Family>(tab, Xe, ideals_[e], measure_, reg, grad, He, form);
+        });
+        Ge.middleCols(Eigen::Index(e) * n, n) = grad;
+        const int* rank = pat.rank.data() + std::size_t(e) * n * n;
+        for (int j = 0; j < n; ++j) {
+          const int fj = free_index_[elements_(j, e)];
+          if (fj < 0) continue;
+          for (int i = 0; i < n; ++i) {
+            const int fi = free_index_[elements_(i, e)];
+            if (fi < 0) continue;
+            for (int c = 0; c < dim; ++c) {
+              double* col = values + outer[dim * fj + c] + dim * rank[i + n * j];
+              for (int a = 0; a < dim; ++a) col[a] += He(a + dim * i, c + dim * j);
+            }
+          }
+        }
+      }
+    }
+    gather(Ge, g);
+    return sum_in_order(fe);
+  }
+
+  /// The Hessian at a configuration as an operator on free-dof vectors, from
+  /// per-quadrature-point data (ElementHessianData), never forming element
+  /// Hessians. Also holds the nodal Dim x Dim diagonal blocks (block Jacobi).
+  class HessianOperator {
+   public:
+    int size() const { return problem_ ? problem_->num_dofs() : 0; }
+    HessianForm form() const { return form_; }
+    /// out = H v.
+    void apply(const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
+      const OptimizationProblem& P = *problem_;
+      const int ne = P.num_elements();
+      const int n = P.nodes_per_element();
+      Eigen::Matrix<double, dim, Eigen::Dynamic> Oe(dim, Eigen::Index(n) * ne);
+      const Tabulation<Family>& tab = *P.tab_;
+      HOM_PARALLEL_FOR(P.threads_)
+      for (int e = 0; e < ne; ++e) {
+        Eigen::Matrix<double, dim, Eigen::Dynamic> Ve(dim, n), out_e;
+        bool any = false;
+        for (int i = 0; i < n; ++i) {
+          const int fi = P.free_index_[P.elements_(i, e)];
+          if (fi >= 0) {
+            Ve.col(i) = v.template segment<dim>(dim * fi);
+            any = true;
+          } else {
+            Ve.col(i).setZero();
+          }
+        }
+        if (any)
+          apply_element_hessian<Family>(tab, data_[e], Ve, out_e);
+        else
+          out_e.setZero(dim, n);
+        Oe.middleCols(Eigen::Index(e) * n, n) = out_e;
+      }
+      P.gather(Oe, out);
+    }
+    /// d^2 f / dx_k^2 for each free node k (Dim x Dim).
+    const std::vector<NodeMatrix>& diagonal_blocks() const { return diagonal_; }
+
+   private:
+    friend class OptimizationProblem;
+    const OptimizationProblem* problem_ = nullptr;
+    HessianForm form_ = HessianForm::gauss_newton;
+    std::vector<ElementHessianData<dim>> data_;
+    std::vector<NodeMatrix> diagonal_;
+  };
+
+  /// f, gradient and the Hessian operator at X. Memory: per quadrature point
+  /// Dim^2 numbers (Gauss-Newton) or Dim^4 (exact, projected).
+  double hessian_operator(const Coordinates& X, HessianForm form, Eigen::VectorXd& g, HessianOperator& op) const {
+    const int ne = num_elements();
+    const int n = nodes_per_element();
+    std::vector<double> fe(ne);
+    Eigen::Matrix<double, dim, Eigen::Dynamic> Ge(dim, Eigen::Index(n) * ne);
+    Eigen::Matrix<double, dim, Eigen::Dynamic> Be(dim, Eigen::Index(dim) * n * ne);
+    op.problem_ = this;
+    op.form_ = form;
+    op.data_.resize(ne);
+    const Tabulation<Family>& tab = *tab_;
+    HOM_PARALLEL_FOR_DYNAMIC(threads_)
+    for (int e = 0; e < ne; ++e) {
+      Eigen::Matrix<double, dim, Eigen::Dynamic> Xe, blocks;
+      ElementGradient<dim> grad;
+      element_coordinates(X, e, Xe);
+      fe[e] = with_regularization(e, [&](const auto& reg) {
+        return element_hessian_data<Family>(tab, Xe, ideals_[e], measure_, reg, form, grad, op.data_[e]);
+      });
+      Ge.middleCols(Eigen::Index(e) * n, n) = grad;
+      element_hessian_diagonal_blocks<Family>(tab, op.data_[e], blocks);
+      Be.middleCols(Eigen::Index(e) * n * dim, n * dim) = blocks;
+    }
+    gather(Ge, g);
+    // Nodal diagonal blocks, summed per node in element order.
+    const int nf = num_free_nodes();
+    op.diagonal_.assign(nf, NodeMatrix::Zero());
+    HOM_PARALLEL_FOR(threads_)
+    for (int k = 0; k < nf; ++k)
+      for (const auto& inc : incidences(free_nodes_[k]))
+        op.diagonal_[k] += Be.template middleCols<dim>((Eigen::Index(inc.element) * n + inc.local) * dim);
+    return sum_in_order(fe);
+  }
+
+  /// out = H(X) v for the given form (builds a HessianOperator; for repeated
+  /// products build the operator once).
+  void hessian_vector_product(const Coordinates& X, HessianForm form, const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
+    HessianOperator op;
+    Eigen::VectorXd g;
+    hessian_operator(X, form, g, op);
+    op.apply(v, out);
+  }
+
+  /// Free nodes colored so that no element contains two nodes of one color
+  /// (greedy first fit in ascending node order): nodes of one color can move
+  /// concurrently in a Gauss-Seidel sweep (appendix B).
+  Coloring free_node_coloring() const {
+    const int n = nodes_per_element();
+    std::vector<int> color(num_nodes(), -1);
+    std::vector<int> stamp;
+    Coloring out;
+    for (int node : free_nodes_) {
+      for (const auto& inc : incidences(node))
+        for (int i = 0; i < n; ++i) {
+          const int c = color[elements_(i, inc.element)];
+          if (c >= 0) stamp[c] = node + 1;
+        }
+      int c = 0;
+      while (c < int(stamp.size()) && stamp[c] == node + 1) ++c;
+      if (c == int(stamp.size())) {
+        stamp.push_back(0);
+        out.groups.emplace_back();
+      }
+      color[node] = c;
+      out.groups[c].push_back(node);
+    }
+    return out;
+  }
+
+ private:
+  struct HessianPattern {
+    SparseMatrix matrix;  ///< structure with zero values
+    /// Per element, n x n (column-major, (i, j) at i + n j): offset of free
+    /// node i's rows inside the columns of free node j, divided by Dim.
+    std::vector<int> rank;
+    Coloring colors;  ///< elements, no two of a color sharing a node
+  };
+
+  static double sum_in_order(const std::vector<double>& v) {
+    double s = 0.0;
+    for (double x : v) s += x;
+    return s;
+  }
+
+  // g[k] = sum over the incidences of free node k (element order) of the
+  // element contributions stored at column e * n + local of Ge.
+  void gather(const Eigen::Matrix<double, dim, Eigen::Dynamic>& Ge, Eigen::VectorXd& g) const {
+    const int n = nodes_per_element();
+    const int nf = num_free_nodes();
+    g.setZero(num_dofs());
+    HOM_PARALLEL_FOR(threads_)
+    for (int k = 0; k < nf; ++k) {
+      Eigen::Matrix<double, dim, 1> s = Eigen::Matrix<double, dim, 1>::Zero();
+      for (const auto& inc : incidences(free_nodes_[k])) s += Ge.col(Eigen::Index(inc.element) * n + inc.local);
+      g.template segment<dim>(dim * k) = s;
+    }
+  }
+
+  void build_incidences() {
+    const int nn = num_nodes();
+    const int n = nodes_per_element();
+    incidence_offsets_.assign(nn + 1, 0);
+    for (Eigen::Index e = 0; e < elements_.cols(); ++e)
+      for (int i = 0; i < n; ++i) ++incidence_offsets_[elements_(i, e) + 1];
+    for (int k = 0; k < nn; ++k) incidence_offsets_[k + 1] += incidence_offsets_[k];
+    incidences_.resize(incidence_offsets_[nn]);
+    std::vector<int> fill(incidence_offsets_.begin(), incidence_offsets_.end() - 1);
+    for (int e = 0; e < int(elements_.cols()); ++e)
+      for (int i = 0; i < n; ++i) incidences_[fill[elements_(i, e)]++] = {e, i};
+  }
+
+  const HessianPattern& pattern() const {
+    if (pattern_) return *pattern_;
+    auto pat = std::make_unique<HessianPattern>();
+    const int n = nodes_per_element();
+    const int nf = num_free_nodes();
+    // Free neighbours of every free node (nodes sharing an element), ascending.
+    std::vector<std::vector<int>> nbr(nf);
+    for (int k = 0; k < nf; ++k) {
+      auto& list = nbr[k];
+      for (const auto& inc : incidences(free_nodes_[k]))
+        for (int i = 0; i < n; ++i) {
+          const int fi = free_index_[elements_(i, inc.element)];
+          if (fi >= 0) list.push_back(fi);
+        }
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    }
+    SparseMatrix& M = pat->matrix;
+    M.resize(num_dofs(), num_dofs());
+    Eigen::VectorXi sizes(num_dofs());
+    for (int k = 0; k < nf; ++k)
+      for (int c = 0; c < dim; ++c) sizes[dim * k + c] = dim * int(nbr[k].size());
+    M.reserve(sizes);
+    for (int k = 0; k < nf; ++k)
+      for (int c = 0; c < dim; ++c)
+        for (int fi : nbr[k])
+          for (int a = 0; a < dim; ++a) M.insert(dim * fi + a, dim * k + c) = 0.0;
+    M.makeCompressed();
+    pat->rank.assign(std::size_t(num_elements()) * n * n, -1);
+    for (int e = 0; e < num_elements(); ++e)
+      for (int j = 0; j < n; ++j) {
+        const int fj = free_index_[elements_(j, e)];
+        if (fj < 0) continue;
+        for (int i = 0; i < n; ++i) {
+          const int fi = free_index_[elements_(i, e)];
+          if (fi < 0) continue;
+          const auto it = std::lower_bound(nbr[fj].begin(), nbr[fj].end(), fi);
+          pat->rank[std::size_t(e) * n * n + i + n * j] = int(it - nbr[fj].begin());
+        }
+      }
+    // Element coloring: greedy first fit in element order.
+    std::vector<int> color(num_elements(), -1);
+    std::vector<int> stamp;
+    for (int e = 0; e < num_elements(); ++e) {
+      for (int i = 0; i < n; ++i)
+        for (const auto& inc : incidences(elements_(i, e)))
+          if (color[inc.element] >= 0) stamp[color[inc.element]] = e + 1;
+      int c = 0;
+      while (c < int(stamp.size()) && stamp[c] == e + 1) ++c;
+      if (c == int(stamp.size())) {
+        stamp.push_back(0);
+        pat->colors.groups.emplace_back();
+      }
+      color[e] = c;
+      pat->colors.groups[c].push_back(e);
+    }
+    pattern_ = std::move(pat);
+    return *pattern_;
+  }
+
+  const Tabulation<Family>* tab_;
+  Coordinates x_;
+  Connectivity elements_;
+  std::vector<bool> free_;
+  std::vector<Ideal> ideals_;
+  Measure measure_;
+  int threads_ = 1;
+  double alpha_ = thesis_regularization_alpha;
+  std::vector<double> deltas_;
+  std::vector<int> free_nodes_;
+  std::vector<int> free_index_;  // -1 for fixed nodes (internal)
+  std::vector<int> incidence_offsets_;
+  std::vector<NodeIncidence> incidences_;
+  mutable std::unique_ptr<HessianPattern> pattern_;
+};
+
+}  // namespace hom
