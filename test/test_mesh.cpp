@@ -381,6 +381,8 @@ TEST_CASE_TEMPLATE("surface meshes (2D families in 3D): elevation, topology, sub
   }
   Mesh<F, WarpBlend, 3> s(1, X, planar.elements());
   s.node_classes() = planar.node_classes();
+  for (auto& c : s.node_classes())
+    if (c.kind == NodeKind::free) c.kind = NodeKind::on_entity;  // on the surface, not free in space
   s.entities() = planar.entities();
   for (const auto& f : planar.boundary_facets()) s.boundary_facets().push_back(f);
   const auto m = elevate(s, 4);

@@ -161,14 +161,28 @@ TEST_CASE_TEMPLATE("proposition 3.2 / corollary 3.5: invariance under similarity
             doctest::Approx(base_shape.distortion).epsilon(1e-10));
       CHECK(element_quality<F>(t, W, ideal, OddyMeasure{}).distortion ==
             doctest::Approx(base_oddy.distortion).epsilon(1e-10));
-      // A reflection of physical and ideal element together (the relative ideal
-      // follows its element) leaves the measure unchanged too.
+      // A reflection: mirror the physical element and renumber its nodes by
+      // the matching symmetry S of the reference element so it keeps its
+      // orientation; its relative ideal follows. Then D phi_E' = R D phi_E(S xi) R^T
+      // and eta_E is unchanged up to the quadrature's lack of symmetry under S,
+      // made negligible with a high-degree rule.
+      const auto& layout = node_layout<F>(p);
       Eigen::Matrix<double, D, D> R = Q;
       R.col(0) *= -1;
-      const ElementNodes<D> V = R * Z;
-      const IdealVertices<F> VI = R * vertices_of<F>(X);
-      const auto reflected = element_quality<F>(t, V, VI, ShapeMeasure{});
-      const auto original = element_quality<F>(t, Z, vertices_of<F>(X), ShapeMeasure{});
+      if (R.determinant() > 0) R.col(1) *= -1;
+      ElementNodes<D> V(D, X.cols());
+      for (int i = 0; i < layout.size(); ++i) {
+        auto l = layout.lattice(i);
+        if constexpr (F::is_simplex)
+          std::swap(l[0], l[1]);
+        else
+          l[0] = p - l[0];
+        V.col(i) = R * Z.col(layout.index_of(l));
+      }
+      const auto& fine = tabulation<F, N>(p, quadrature_for<F, ThesisExactness>(8));
+      const auto reflected = element_quality<F>(fine, V, vertices_of<F>(V), ShapeMeasure{});
+      const auto original = element_quality<F>(fine, Z, vertices_of<F>(Z), ShapeMeasure{});
+      CHECK(reflected.valid);
       CHECK(reflected.distortion == doctest::Approx(original.distortion).epsilon(1e-10));
     }
   }
@@ -205,6 +219,13 @@ TEST_CASE_TEMPLATE("folded elements get q = 0, slightly curved ones 0 < q < 1", 
     CHECK(folded.quality == 0.0);
     CHECK(element_quality<F>(t, Z, ideal, OddyMeasure{}).quality == 0.0);
     CHECK(folded.scaled_jacobian() < 0.0);
+    // A straight-sided but inverted element (mirrored without renumbering) is
+    // invalid even against its own, equally inverted, relative ideal.
+    ElementNodes<D> M = X;
+    M.row(0) *= -1.0;
+    const auto mirrored = element_quality<F>(t, M, vertices_of<F>(M), ShapeMeasure{});
+    CHECK_FALSE(mirrored.valid);
+    CHECK(mirrored.quality == 0.0);
   }
 }
 

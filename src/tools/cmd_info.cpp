@@ -71,6 +71,13 @@ int run(int argc, char** argv) {
   }
   std::cout << o.str();
 
+  if (s.top_shapes.size() > 1) {
+    // Describing such a file is fine; using it is not (convert, quality, ...).
+    std::cout << "mesh:            mixes";
+    for (auto shape : s.top_shapes) std::cout << " " << hom::io::shape_name(shape);
+    std::cout << " elements: hom reads one element family per mesh\n";
+    return 0;
+  }
   hom::tools::with_mesh<hom::Equispaced>(data, [&](auto& m) {
     using M = std::decay_t<decltype(m)>;
     using F = typename M::family;

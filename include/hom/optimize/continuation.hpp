@@ -16,7 +16,8 @@
 ///       2. If the linear sub-mesh has inverted sub-elements (an untangled
 ///          linear sub-mesh is necessary for a valid high-order mesh), optimize
 ///          it as a p = 1 problem with the same measure, regularization and
-///          solver, and the same fixed nodes. Otherwise do nothing: "we only
+///          solver, and the same fixed nodes (one quadrature point per
+///          simplex, whose Jacobian is constant). Otherwise do nothing: "we only
 ///          apply our procedure when this necessary condition is not hold".
 ///       3. The high-order mesh takes the optimized node positions (the
 ///          sub-mesh's nodes are the high-order nodes; nothing is interpolated).
@@ -57,7 +58,10 @@ OptimizationProblem<Family, Measure> make_linear_sub_problem(const Mesh<Family, 
   const int p = mesh.degree();
   const auto split = linear_sub_elements<Family>(p);
   const int ns = int(split.size());
-  const Tabulation<Family>& tab = tabulation<Family, Nodes>(1, quadrature_for<Family, Q>(1));
+  // A linear simplex has a constant Jacobian: one point integrates eq 4.10
+  // exactly and decides validity exactly. Cubes keep the policy's rule.
+  const QuadratureRule<Family::dim>& rule = Family::is_simplex ? cached_gauss_rule<Family>(1) : quadrature_for<Family, Q>(1);
+  const Tabulation<Family>& tab = tabulation<Family, Nodes>(1, rule);
   const Eigen::MatrixXd& to_nodes = detail::vertex_shape_matrix<Family, Nodes>(p);  // num_vertices x n_p
   Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic> conn(nv, Eigen::Index(ns) * mesh.num_elements());
   std::vector<IdealAtPoints<Family::dim>> ideals(conn.cols());

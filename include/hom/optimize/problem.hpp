@@ -280,6 +280,46 @@ class OptimizationProblem {
     return sum_in_order(fe);
   }
 
+  /// s_k for each free node k: sum over its elements e (local node l) and their
+  /// quadrature points of c_q ||A_q^T G_q(l,:)^T||, i.e. the size grad_k f would
+  /// have if every eta - 1 and every d eta / dJ had size 1 (computed once).
+  const Eigen::VectorXd& gradient_scale() const {
+    if (gradient_scale_.size() == num_free_nodes()) return gradient_scale_;
+    const int ne = num_elements();
+    const int n = nodes_per_element();
+    const Tabulation<Family>& tab = *tab_;
+    Eigen::Matrix<double, 1, Eigen::Dynamic> Se(1, Eigen::Index(n) * ne);
+    HOM_PARALLEL_FOR(threads_)
+    for (int e = 0; e < ne; ++e) {
+      const Ideal& id = ideals_[e];
+      for (int l = 0; l < n; ++l) {
+        double s = 0.0;
+        for (int q = 0; q < tab.num_points(); ++q)
+          s += id.weight[q] *
+               (id.inverse_jacobian[q].transpose() * tab.shape_gradients.row(l).template segment<dim>(q * dim).transpose()).norm();
+        Se(Eigen::Index(e) * n + l) = s;
+      }
+    }
+    const int nf = num_free_nodes();
+    Eigen::VectorXd scale(nf);
+    for (int k = 0; k < nf; ++k) {
+      double s = 0.0;
+      for (const auto& inc : incidences(free_nodes_[k])) s += Se(Eigen::Index(inc.element) * n + inc.local);
+      scale[k] = s > 0.0 ? s : 1.0;
+    }
+    gradient_scale_ = std::move(scale);
+    return gradient_scale_;
+  }
+
+  /// max_k ||grad_k f|| / s_k: the gradient as a dimensionless residual,
+  /// invariant under scaling of the mesh (stopping criterion of solver.hpp).
+  double scaled_gradient_norm(const Eigen::VectorXd& g) const {
+    const Eigen::VectorXd& s = gradient_scale();
+    double r = 0.0;
+    for (int k = 0; k < num_free_nodes(); ++k) r = std::max(r, g.template segment<dim>(dim * k).norm() / s[k]);
+    return r;
+  }
+
   /// f, gradient and the Hessian over the free dofs (symmetric, full storage).
   /// Elements are assembled color by color (no two elements of a color share a
   /// node), so every matrix entry is summed in the same order on any number of threads.
@@ -559,6 +599,7 @@ class OptimizationProblem {
   std::vector<int> incidence_offsets_;
   std::vector<NodeIncidence> incidences_;
   mutable std::unique_ptr<HessianPattern> pattern_;
+  mutable Eigen::VectorXd gradient_scale_;
 };
 
 }  // namespace hom

@@ -25,8 +25,11 @@
 /// 1-3 are only tested when every element is valid (while elements are
 /// invalid the objective is regularized and changes definition between
 /// iterations, so only 4-5 apply):
-///   1. gradient:  ||grad f_k||_2 <= gradient_tolerance * ||grad f_r||_2, with r the
-///      first iteration at which every element was valid (or grad f_k = 0);
+///   1. gradient: max_k ||grad_k f|| / s_k <= gradient_tolerance, the gradient
+///      at every free node k relative to its scale s_k (the value grad_k f would
+///      have if every eta - 1 and every d eta / dJ were 1, see
+///      OptimizationProblem::gradient_scale): a dimensionless residual,
+///      independent of the mesh's size and of the starting configuration;
 ///   2. objective: f_k - f_k+ <= objective_tolerance * f_k (relative change over
 ///      one iteration, both values with delta = 0);
 ///   3. quality stagnation: every element valid during the last
@@ -78,7 +81,7 @@ struct IterationInfo {
   std::string_view solver;
   int iteration = 0;           ///< 1-based
   double objective = 0.0;      ///< f after the step (deltas of this iteration)
-  double gradient_norm = 0.0;  ///< ||grad f|| before the step
+  double gradient_norm = 0.0;  ///< scaled gradient (criterion 1) before the step
   int inverted = 0;            ///< invalid elements after the step
   double min_quality = 0.0;    ///< min element quality after the step
   double step = 0.0;           ///< accepted step length (Gauss-Seidel: fraction of free nodes moved)
@@ -89,7 +92,7 @@ struct IterationInfo {
 /// Prints one line per iteration (the default progress output when verbose).
 inline void print_iteration(const IterationInfo& it, std::ostream& out = std::clog) {
   char line[256];
-  std::snprintf(line, sizeof line, "%-18.*s it %4d  f %12.6e  |g| %10.3e  inv %6d  qmin %.4f  step %9.2e  inner %4d  %8.2f s\n",
+  std::snprintf(line, sizeof line, "%-18.*s it %4d  f %12.6e  grad %10.3e  inv %6d  qmin %.4f  step %9.2e  inner %4d  %8.2f s\n",
                 int(it.solver.size()), it.solver.data(), it.iteration, it.objective, it.gradient_norm, it.inverted,
                 it.min_quality, it.step, it.inner, it.time_s);
   out << line << std::flush;
@@ -114,7 +117,7 @@ struct SolverResult {
   int inverted = 0;
   double initial_min_quality = 0.0;
   double min_quality = 0.0;
-  double gradient_norm = 0.0;  ///< at the last evaluation
+  double gradient_norm = 0.0;  ///< scaled gradient (criterion 1) at the last evaluation
   double time_s = 0.0;
   bool converged = false;
   StopReason reason = StopReason::max_iterations;
@@ -182,19 +185,17 @@ SolverResult run_outer_loop(Problem& problem, const SolverOptions& opt, std::str
   MeshState state = problem.status(problem.coordinates());
   res.initial_inverted = state.inverted;
   res.initial_min_quality = state.min_quality;
-  double reference_gradient = std::numeric_limits<double>::quiet_NaN();
   std::deque<double> recent_quality;  // min quality over the trailing all-valid iterations
   Eigen::VectorXd g;
   bool stopped = false;
   for (int k = 0; !stopped; ++k) {
     problem.update_regularization(state);
     const double f = step.evaluate(problem, g);
-    const double gnorm = g.norm();
+    const double gnorm = problem.scaled_gradient_norm(g);
     res.gradient_norm = gnorm;
     if (k == 0) res.initial_objective = f;
     if (state.all_valid()) {
-      if (std::isnan(reference_gradient)) reference_gradient = gnorm;
-      if (gnorm == 0.0 || gnorm <= opt.gradient_tolerance * reference_gradient) {
+      if (gnorm <= opt.gradient_tolerance) {
         res.reason = StopReason::gradient;
         res.converged = true;
         break;

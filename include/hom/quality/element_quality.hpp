@@ -9,7 +9,9 @@
 /// The norms are integrals over the ideal element, computed on the reference
 /// element with the change of variables of eq 3.18 (weight |det D phi_I|) and
 /// a quadrature rule. Validation uses sigma_0 (eq 3.8): q_E = 0 exactly when
-/// det D phi_E <= 0 at some quadrature point (remark 3.3).
+/// det D phi_E <= 0 at some quadrature point (remark 3.3), or when the element
+/// is inverted with respect to the master element (det D phi_P <= 0), which
+/// also catches an inverted ideal (remark 3.1 requires a valid one).
 ///
 /// Also here: the scaled Jacobian mu = min det D phi_P / max det D phi_P (eq 5.31,
 /// section 4.3.3) over the quadrature points and the nodes, and the element's
@@ -79,7 +81,11 @@ ElementQuality element_quality(const Tabulation<Family>& tab, const Eigen::Ref<c
     r.volume += tab.rule.weights[q] * det_p;
     r.ideal_volume += tab.rule.weights[q] * det_i;
     const double eta = measure.value(Mat(Jp * Ji.inverse()), validation);
-    if (!std::isfinite(eta)) r.valid = false;
+    // Valid: det D phi_E > 0 (finite eta under sigma_0) and the element keeps
+    // the master element's orientation, det D phi_P > 0. The second test
+    // matters when the ideal is itself inverted (a tangled straight-sided
+    // element as its own relative ideal: remark 3.1 asks for a valid ideal).
+    if (!std::isfinite(eta) || !(det_p > 0.0)) r.valid = false;
     if (pointwise) (*pointwise)[q] = std::isfinite(eta) ? 1.0 / eta : 0.0;
     integral += w * eta * eta;
     ideal_measure += w;

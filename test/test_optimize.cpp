@@ -1,0 +1,381 @@
+// The optimizer of chapter 4 and appendices B-C (include/hom/optimize/):
+// global derivatives against finite differences, the three solvers on
+// perturbed meshes of every family, agreement between solvers, independence of
+// the thread count, consistency (valid elements stay valid), p-continuation
+// and curved boundaries.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "hom/mesh/elevate.hpp"
+#include "hom/mesh/structured.hpp"
+#include "hom/optimize/continuation.hpp"
+#include "hom/optimize/gauss_seidel.hpp"
+#include "hom/optimize/matrix_free_newton.hpp"
+#include "hom/optimize/mesh_problem.hpp"
+#include "hom/optimize/newton.hpp"
+#include "hom/optimize/optimize.hpp"
+
+using namespace hom;
+
+namespace {
+
+template <class F>
+using TestMesh = Mesh<F, WarpBlend>;
+
+// Unit box with n cells per axis, elevated to degree p.
+template <class F>
+TestMesh<F> box_mesh(int n, int p) {
+  std::array<int, F::dim> cells;
+  cells.fill(n);
+  return elevate(structured_mesh<F, WarpBlend>(cells), p);
+}
+
+// Moves every free node by a uniform random vector of the given amplitude per coordinate.
+template <class MeshT>
+void perturb(MeshT& mesh, double amplitude, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-amplitude, amplitude);
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    if (mesh.node_class(i).kind == NodeKind::free)
+      for (int a = 0; a < MeshT::space_dim; ++a) mesh.nodes()(a, i) += u(rng);
+}
+
+template <class MeshT>
+MeshState mesh_state(const MeshT& mesh) {
+  const auto problem = make_problem(mesh, make_ideal_mesh(mesh, IdealKind::straight_sided));
+  return problem.status(problem.coordinates());
+}
+
+// Annulus r0 < r < r1 of triangles (nt sectors, nr layers), elevated to p,
+// boundary nodes projected radially onto the two circles (fixed there).
+TestMesh<Simplex<2>> ring_mesh(int nt, int nr, double r0, double r1, int p) {
+  using M = TestMesh<Simplex<2>>;
+  const int np = (nr + 1) * nt;
+  M::Coordinates X(2, np);
+  auto id = [&](int i, int j) { return i * nt + (j % nt); };
+  for (int i = 0; i <= nr; ++i)
+    for (int j = 0; j < nt; ++j) {
+      const double r = r0 + (r1 - r0) * i / nr, t = 2 * std::numbers::pi * j / nt;
+      X.col(id(i, j)) << r * std::cos(t), r * std::sin(t);
+    }
+  M::Connectivity conn(3, 2 * nr * nt);
+  int e = 0;
+  for (int i = 0; i < nr; ++i)
+    for (int j = 0; j < nt; ++j) {
+      const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      for (auto tri : {std::array<int, 3>{a, b, c}, std::array<int, 3>{a, c, d}}) {
+        Eigen::Matrix2d J;
+        J.col(0) = X.col(tri[1]) - X.col(tri[0]);
+        J.col(1) = X.col(tri[2]) - X.col(tri[0]);
+        if (J.determinant() < 0) std::swap(tri[1], tri[2]);
+        for (int k = 0; k < 3; ++k) conn(k, e) = tri[k];
+        ++e;
+      }
+    }
+  M linear(1, X, conn);
+  for (int i = 0; i < np; ++i)
+    if (i < nt || i >= nr * nt) linear.node_class(i).kind = NodeKind::fixed;
+  M mesh = elevate(linear, p);
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    if (mesh.node_class(i).kind == NodeKind::free) continue;
+    const double r = mesh.node(i).norm();
+    mesh.node(i) *= (r < 0.5 * (r0 + r1) ? r0 : r1) / r;
+  }
+  return mesh;
+}
+
+template <class F>
+double max_node_distance(const TestMesh<F>& a, const TestMesh<F>& b) {
+  return (a.nodes() - b.nodes()).colwise().norm().maxCoeff();
+}
+
+OptimizeOptions tight_options(SolverKind kind) {
+  OptimizeOptions o;
+  o.solver = kind;
+  o.max_iterations = 400;
+  o.gradient_tolerance = 1e-10;
+  o.objective_tolerance = 1e-14;
+  o.quality_tolerance = 1e-12;
+  o.threads = 1;
+  return o;
+}
+
+constexpr SolverKind all_solvers[] = {SolverKind::newton, SolverKind::matrix_free_newton, SolverKind::gauss_seidel};
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("global gradient, Hessian and Hessian-vector products agree with finite differences", F, Simplex<2>,
+                   Cube<2>, Simplex<3>, Cube<3>) {
+  constexpr int D = F::dim;
+  // Perturbed so that some elements are inverted (regularized, delta > 0) and
+  // the others valid (sigma_0).
+  const int n = D == 2 ? 3 : 2;
+  auto mesh = box_mesh<F>(n, 2);
+  perturb(mesh, (F::is_simplex ? 0.45 : 0.5) / (2 * n), D == 2 ? 102 : 202);
+  auto problem = make_problem(mesh, make_ideal_mesh(mesh, IdealKind::straight_sided));
+  const MeshState state = problem.status(problem.coordinates());
+  problem.update_regularization(state);
+  INFO("inverted elements: ", state.inverted);
+  CHECK(state.inverted > 0);
+  CHECK(state.inverted < problem.num_elements());
+
+  const auto X = problem.coordinates();
+  Eigen::VectorXd g;
+  const double f = problem.value_gradient(X, g);
+  CHECK(f == doctest::Approx(problem.value(X)).epsilon(1e-14));
+  const int nd = problem.num_dofs();
+  REQUIRE(nd > 0);
+  // Fourth-order central differences: nearly degenerate valid elements have
+  // large third derivatives.
+  const double h = 1e-5;
+  auto derivative = [&](auto&& phi) { return (-phi(2 * h) + 8 * phi(h) - 8 * phi(-h) + phi(-2 * h)) / (12 * h); };
+  Eigen::VectorXd fd(nd);
+  for (int k = 0; k < nd; ++k) {
+    const Eigen::VectorXd ek = Eigen::VectorXd::Unit(nd, k);
+    fd[k] = derivative([&](double t) { return problem.value(problem.displaced(X, ek, t)); });
+  }
+  CHECK((fd - g).norm() <= 1e-7 * g.norm());
+
+  // Exact Hessian: columns against finite differences of the gradient.
+  Eigen::SparseMatrix<double> H;
+  Eigen::VectorXd g2;
+  problem.hessian(X, HessianForm::exact, g2, H);
+  CHECK((g2 - g).norm() <= 1e-13 * g.norm());
+  const Eigen::MatrixXd Hd = Eigen::MatrixXd(H);
+  CHECK((Hd - Hd.transpose()).norm() <= 1e-12 * Hd.norm());
+  auto gradient_derivative = [&](const Eigen::VectorXd& v) {
+    Eigen::VectorXd out = Eigen::VectorXd::Zero(nd), gt;
+    for (auto [t, w] : {std::pair{2 * h, -1.0}, {h, 8.0}, {-h, -8.0}, {-2 * h, 1.0}}) {
+      problem.value_gradient(problem.displaced(X, v, t), gt);
+      out += w * gt;
+    }
+    return Eigen::VectorXd(out / (12 * h));
+  };
+  for (int k = 0; k < nd; k += std::max(1, nd / 12))
+    CHECK((gradient_derivative(Eigen::VectorXd::Unit(nd, k)) - Hd.col(k)).norm() <= 1e-6 * Hd.norm());
+
+  // Hessian-vector products, every form, against the assembled matrix of the
+  // same form; the exact one also against a directional difference of the gradient.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd v(nd);
+  for (int k = 0; k < nd; ++k) v[k] = normal(rng);
+  for (HessianForm form : {HessianForm::exact, HessianForm::projected, HessianForm::gauss_newton}) {
+    Eigen::SparseMatrix<double> Hf;
+    Eigen::VectorXd gf, hv;
+    problem.hessian(X, form, gf, Hf);
+    problem.hessian_vector_product(X, form, v, hv);
+    const Eigen::VectorXd ref = Hf * v;
+    CHECK((hv - ref).norm() <= 1e-12 * (ref.norm() + Eigen::MatrixXd(Hf).norm()));
+    if (form != HessianForm::exact) {
+      // Projected and Gauss-Newton Hessians are positive semi-definite.
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es{Eigen::MatrixXd(Hf)};
+      CHECK(es.eigenvalues().minCoeff() >= -1e-10 * es.eigenvalues().cwiseAbs().maxCoeff());
+    }
+    // The operator's nodal diagonal blocks are the matrix's.
+    typename decltype(problem)::HessianOperator op;
+    problem.hessian_operator(X, form, gf, op);
+    double block_error = 0.0;
+    for (int k = 0; k < problem.num_free_nodes(); ++k)
+      block_error = std::max(block_error, (op.diagonal_blocks()[k] - Eigen::MatrixXd(Hf).block(D * k, D * k, D, D)).norm());
+    CHECK(block_error <= 1e-12 * Eigen::MatrixXd(Hf).norm());
+  }
+  Eigen::VectorXd hv;
+  problem.hessian_vector_product(X, HessianForm::exact, v, hv);
+  CHECK((gradient_derivative(v) - hv).norm() <= 1e-6 * hv.norm());
+}
+
+namespace {
+
+// Perturbs a degree-p box mesh until some elements are inverted, runs one
+// solver and checks that it recovers the unperturbed (optimal, f = 0) mesh.
+template <class F>
+void check_untangles(int n, int p, double amplitude, SolverKind kind, unsigned seed) {
+  CAPTURE(p);
+  CAPTURE(to_string(kind));
+  auto mesh = box_mesh<F>(n, p);
+  const auto reference = mesh;
+  perturb(mesh, amplitude / (n * p), seed);
+  const MeshState before = mesh_state(mesh);
+  CHECK(before.inverted > 0);
+  OptimizeOptions o;
+  o.solver = kind;
+  o.threads = 1;
+  const OptimizeResult r = optimize(mesh, o);
+  CAPTURE(before.inverted);
+  CAPTURE(r.result.iterations);
+  CAPTURE(to_string(r.result.reason));
+  CHECK(r.result.initial_inverted == before.inverted);
+  CHECK(r.inverted() == 0);
+  CHECK(r.converged());
+  CHECK(r.min_quality() > 0.95);
+  const MeshState after = mesh_state(mesh);
+  CHECK(after.inverted == 0);
+  CHECK(after.min_quality == doctest::Approx(r.min_quality()).epsilon(1e-12));
+  // Near the optimum, the nodes are near their unperturbed positions.
+  CHECK(max_node_distance<F>(mesh, reference) < 0.05 / (n * p));
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("every solver untangles a perturbed planar mesh and recovers its ideal", F, Simplex<2>, Cube<2>) {
+  for (int p = 2; p <= 4; ++p)
+    for (SolverKind kind : all_solvers) check_untangles<F>(3, p, 0.45, kind, 100 + p);
+}
+
+TEST_CASE_TEMPLATE("every solver untangles a perturbed volume mesh and recovers its ideal", F, Simplex<3>, Cube<3>) {
+  for (SolverKind kind : all_solvers) {
+    check_untangles<F>(2, 2, 0.5, kind, 202);
+    check_untangles<F>(1, 3, 0.5, kind, 203);  // every hexahedron inverted, 5 of 6 tetrahedra
+  }
+}
+
+TEST_CASE_TEMPLATE("the three solvers reach the same optimum", F, Simplex<2>, Cube<2>, Simplex<3>) {
+  const int p = F::dim == 2 ? 3 : 2;
+  auto start = box_mesh<F>(2, p);
+  const auto reference = start;
+  perturb(start, 0.45 / (2 * p), 7);
+  std::vector<TestMesh<F>> results;
+  std::vector<double> objectives;
+  for (SolverKind kind : all_solvers) {
+    auto mesh = start;
+    const auto r = optimize(mesh, tight_options(kind));
+    CAPTURE(to_string(kind));
+    CAPTURE(to_string(r.result.reason));
+    CHECK(r.converged());
+    CHECK(r.inverted() == 0);
+    objectives.push_back(r.result.objective);
+    results.push_back(mesh);
+  }
+  // f* = 0 (the unperturbed mesh); the minimum is degenerate (f ~ |x - x*|^4),
+  // so positions agree to about f^(1/4) (node spacing 1 / (2p)).
+  const double spacing = 1.0 / (2 * p);
+  for (double f : objectives) CHECK(f < 1e-12);
+  for (std::size_t a = 0; a < results.size(); ++a) {
+    CHECK(max_node_distance<F>(results[a], reference) < 5e-3 * spacing);
+    for (std::size_t b = a + 1; b < results.size(); ++b)
+      CHECK(max_node_distance<F>(results[a], results[b]) < 5e-3 * spacing);
+  }
+}
+
+TEST_CASE_TEMPLATE("results do not depend on the number of threads", F, Simplex<2>, Cube<3>) {
+  auto start = box_mesh<F>(F::dim == 2 ? 4 : 2, 2);
+  perturb(start, 0.4 / (F::dim == 2 ? 8 : 4), 3);
+  for (SolverKind kind : all_solvers) {
+    CAPTURE(to_string(kind));
+    auto one = start, two = start;
+    auto o = tight_options(kind);
+    o.max_iterations = 8;
+    o.threads = 1;
+    const auto r1 = optimize(one, o);
+    o.threads = 2;
+    const auto r2 = optimize(two, o);
+    CHECK(r1.result.iterations == r2.result.iterations);
+    CHECK(r1.result.objective == r2.result.objective);
+    CHECK(max_node_distance<F>(one, two) == 0.0);
+  }
+}
+
+TEST_CASE("elements valid at the start stay valid; the number of invalid elements never increases") {
+  for (SolverKind kind : all_solvers) {
+    for (int iterations : {1, 3, 100}) {
+      CAPTURE(to_string(kind));
+      CAPTURE(iterations);
+      auto mesh = box_mesh<Simplex<2>>(3, 3);
+      perturb(mesh, 0.45 / 9, 17);
+      const MeshState before = mesh_state(mesh);
+      REQUIRE(before.inverted > 0);
+      REQUIRE(before.inverted < mesh.num_elements());
+      OptimizeOptions o;
+      o.solver = kind;
+      o.threads = 1;
+      o.max_iterations = iterations;
+      int last = before.inverted;
+      bool monotone = true;
+      o.on_iteration = [&](const IterationInfo& it) {
+        monotone = monotone && it.inverted <= last;
+        last = it.inverted;
+      };
+      const auto r = optimize(mesh, o);
+      CHECK(monotone);
+      const MeshState after = mesh_state(mesh);
+      CHECK(after.inverted == r.inverted());
+      CHECK(after.inverted <= before.inverted);
+      for (int e = 0; e < mesh.num_elements(); ++e)
+        if (before.valid[e]) CHECK(after.valid[e]);
+    }
+  }
+}
+
+TEST_CASE("a curved ring whose elevated mesh is invalid after curving is repaired by every solver") {
+  const auto curved = ring_mesh(6, 1, 1.0, 1.6, 3);
+  const MeshState before = mesh_state(curved);
+  CAPTURE(before.inverted);
+  REQUIRE(before.inverted > 0);
+  for (SolverKind kind : all_solvers) {
+    CAPTURE(to_string(kind));
+    auto mesh = curved;
+    OptimizeOptions o;
+    o.solver = kind;
+    o.threads = 1;
+    const auto r = optimize(mesh, o);
+    CHECK(r.inverted() == 0);
+    CHECK(r.min_quality() > 0.2);
+    // Fixed (boundary) nodes did not move; they are on the circles.
+    for (int i = 0; i < mesh.num_nodes(); ++i)
+      if (mesh.node_class(i).kind != NodeKind::free) {
+        CHECK((mesh.node(i) - curved.node(i)).norm() == 0.0);
+        const double r0 = mesh.node(i).norm();
+        CHECK(std::min(std::abs(r0 - 1.0), std::abs(r0 - 1.6)) < 1e-12);
+      }
+  }
+}
+
+TEST_CASE("p-continuation untangles the linear sub-mesh first and ends valid on a curved ring") {
+  // Figure C.2's setting: a degree-4 ring of 24 triangles whose boundary
+  // edges were curved onto the circles, tangled near the inner circle.
+  const auto curved = ring_mesh(6, 2, 1.0, 2.0, 4);
+  REQUIRE(mesh_state(curved).inverted > 0);
+  {
+    const auto sub = make_linear_sub_problem(curved, make_ideal_mesh(curved, IdealKind::straight_sided));
+    REQUIRE(sub.num_elements() == 16 * curved.num_elements());
+    REQUIRE(sub.status(sub.coordinates()).inverted > 0);
+  }
+  for (SolverKind kind : all_solvers) {
+    CAPTURE(to_string(kind));
+    auto with = curved, without = curved;
+    OptimizeOptions o;
+    o.solver = kind;
+    o.threads = 1;
+    o.p_continuation = true;
+    const auto r = optimize(with, o);
+    REQUIRE(r.continuation.has_value());
+    CHECK(r.continuation->initial_inverted > 0);
+    CHECK(r.continuation->inverted == 0);
+    CHECK(r.inverted() == 0);
+    CHECK(r.min_quality() > 0.9);
+    o.p_continuation = false;
+    const auto s = optimize(without, o);
+    CHECK(!s.continuation.has_value());
+    CHECK(s.inverted() == 0);
+    MESSAGE(to_string(kind), ": with p-continuation ", r.continuation->iterations, " linear + ", r.result.iterations,
+            " high-order iterations (", r.time_s, " s); without ", s.result.iterations, " (", s.time_s, " s)");
+  }
+}
+
+TEST_CASE("p-continuation does nothing when the linear sub-mesh is valid") {
+  auto mesh = box_mesh<Cube<2>>(2, 3);
+  OptimizeOptions o;
+  o.p_continuation = true;
+  const auto r = optimize(mesh, o);
+  CHECK(!r.continuation.has_value());
+  CHECK(r.inverted() == 0);
+  CHECK(r.min_quality() == doctest::Approx(1.0).epsilon(1e-9));
+}
