@@ -3,6 +3,7 @@
 // corollary 3.5, validity detection, scaled Jacobian and volume.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -260,4 +261,54 @@ TEST_CASE("statistics in table form") {
   CHECK(s.mean == doctest::Approx(0.5));
   CHECK(s.std_dev == doctest::Approx(std::sqrt(0.125)));
   CHECK(s.inverted == 1);
+}
+
+#include "hom/mesh/elevate.hpp"
+#include "hom/mesh/structured.hpp"
+#include "hom/quality/mesh_quality.hpp"
+
+TEST_CASE_TEMPLATE("mesh quality: definitions 3.7-3.8 and the table row", F, Simplex<2>, Simplex<3>, Cube<2>, Cube<3>) {
+  std::array<int, F::dim> n;
+  n.fill(2);
+  const int p = 3;
+  auto mesh = elevate(structured_mesh<F>(n), p);
+  // Straight-sided elements measured against themselves: all ideal.
+  const auto ideal = mesh_quality(mesh, ShapeMeasure{});
+  const auto s = ideal.quality_statistics();
+  CHECK(s.count == mesh.num_elements());
+  CHECK(s.min == doctest::Approx(1.0).epsilon(1e-12));
+  CHECK(s.inverted == 0);
+  CHECK(ideal.mesh_quality == doctest::Approx(1.0).epsilon(1e-12));
+  CHECK(ideal.scaled_jacobian_statistics().min == doctest::Approx(1.0).epsilon(1e-10));
+  // The same through a user-given per-element ideal equal to the straight-sided one.
+  const auto user = mesh_quality(mesh, ShapeMeasure{}, mesh.straight_sided_ideal(), quadrature_for<F, DefaultExactness>(p));
+  CHECK(user.quality_statistics().mean == doctest::Approx(1.0).epsilon(1e-12));
+  // Absolute quality against the regular element: right-angled simplices are
+  // not equilateral (q < 1), the square cells of a cube mesh are.
+  const auto absolute = mesh_quality(mesh, ShapeMeasure{}, IdealKind::regular);
+  if constexpr (F::is_simplex) {
+    CHECK(absolute.quality_statistics().max < 1.0);
+    CHECK(absolute.quality_statistics().min > 0.5);
+  } else {
+    CHECK(absolute.quality_statistics().min == doctest::Approx(1.0).epsilon(1e-12));
+  }
+  // Fold one element: pull the last (face or cell) node of element 0 far
+  // away. Some element holding it folds (which one depends on the direction),
+  // only elements holding it can; q_M = 0.
+  const int node = mesh.elements()(mesh.nodes_per_element() - 1, 0);
+  mesh.nodes().col(node).array() += 5.0;
+  const auto folded = mesh_quality(mesh, ShapeMeasure{});
+  CHECK(folded.inverted() >= 1);
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    bool holds = false;
+    for (int i = 0; i < mesh.nodes_per_element(); ++i) holds = holds || mesh.elements()(i, e) == node;
+    if (!holds) CHECK(folded.elements[e].valid);
+  }
+  CHECK(folded.mesh_quality == 0.0);
+  CHECK(folded.quality_statistics().min == 0.0);
+  // The point-wise nodal quality sees the fold too (the moved node's own shape
+  // function has zero gradient at its node, so look at all nodes).
+  const auto nodal = nodal_mesh_quality(mesh, ShapeMeasure{}, IdealKind::straight_sided, quadrature_for<F, DefaultExactness>(p));
+  CHECK(*std::min_element(nodal.begin(), nodal.end()) < 0.5);
+  CHECK(*std::max_element(nodal.begin(), nodal.end()) == doctest::Approx(1.0));
 }

@@ -17,13 +17,15 @@
 /// node i) has index a + Dim * i, the storage order of a column-major X.
 ///
 /// `project_hessian` (HessianForm::projected) replaces each quadrature point's
-/// Dim^2 x Dim^2 block by its positive semi-definite part (eigenvalues clamped
-/// at 0) before the pull back, so the element Hessian is positive
+/// Dim^2 x Dim^2 block, in J coordinates, by its positive semi-definite part
+/// (eigenvalues clamped at 0) before the pull back, so the element Hessian is positive
 /// semi-definite: the modification for indefinite Hessians used by the Newton
 /// solvers. HessianForm::gauss_newton keeps only the g g^T term. The point
 /// data (ElementHessianData) also applies the element Hessian to a direction
 /// without forming it (apply_element_hessian), for matrix-free Newton-CG.
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -69,9 +71,69 @@ Eigen::Matrix<double, N, N> psd_part(const Eigen::Matrix<double, N, N>& M) {
   // Most blocks of a valid configuration are positive definite already; a
   // Cholesky factorization (a fraction of the eigensolver's cost) detects them.
   if (Eigen::LLT<Eigen::Matrix<double, N, N>>(M).info() == Eigen::Success) return M;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(M);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es;
+  if constexpr (N <= 3)
+    es.computeDirect(M);  // closed form; its accuracy is ample for clamping eigenvalues
+  else
+    es.compute(M);
   const Eigen::Matrix<double, N, 1> lambda = es.eigenvalues().cwiseMax(0.0);
   return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
+}
+
+// The positive semi-definite part of M, the second derivative with respect to
+// J (flattened column-major) of a function of J that is isotropic,
+// phi(R1 J R2) = phi(J) for rotations R1, R2 (every distortion measure, and
+// c (eta - 1)^2 / 2 built from one). With J = U S V^T (SVD), such a Hessian is
+// block diagonal in the basis vec(U E_ij V^T) (Smith, De Goes & Kim 2019,
+// "Analytic eigensystems for isotropic distortion energies"): one Dim x Dim
+// block on the "stretch" directions E_ii and a 2 x 2 block on each pair
+// (E_ij, E_ji). Projecting the blocks costs a fraction of a Dim^2 x Dim^2
+// eigensolver. If M is not block diagonal in that basis (a measure that is
+// not isotropic), the full eigensolver is used.
+template <int D>
+Eigen::Matrix<double, D * D, D * D> isotropic_psd_part(const Eigen::Matrix<double, D, D>& J,
+                                                      const Eigen::Matrix<double, D * D, D * D>& M) {
+  constexpr int D2 = D * D;
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Mat2 = Eigen::Matrix<double, D2, D2>;
+  const Eigen::JacobiSVD<Mat> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Mat& U = svd.matrixU();
+  const Mat& V = svd.matrixV();
+  // Column i + D j of Q is vec(u_i v_j^T).
+  Mat2 Q;
+  for (int j = 0; j < D; ++j)
+    for (int i = 0; i < D; ++i)
+      for (int b = 0; b < D; ++b)
+        for (int a = 0; a < D; ++a) Q(a + D * b, i + D * j) = U(a, i) * V(b, j);
+  const Mat2 B = Q.transpose() * M * Q;
+  // Block of each flattened index: 0 for the stretch block, 1 + pair number otherwise.
+  std::array<int, D2> block{};
+  for (int j = 0, pair = 1; j < D; ++j)
+    for (int i = 0; i < j; ++i, ++pair) block[i + D * j] = block[j + D * i] = pair;
+  double off = 0.0;
+  for (int c = 0; c < D2; ++c)
+    for (int r = 0; r < D2; ++r)
+      if (block[r] != block[c]) off = std::max(off, std::abs(B(r, c)));
+  if (off > 1e-10 * B.cwiseAbs().maxCoeff()) return psd_part<D2>(M);
+  Mat2 P = Mat2::Zero();
+  Mat S;
+  for (int i = 0; i < D; ++i)
+    for (int k = 0; k < D; ++k) S(i, k) = B(i + D * i, k + D * k);
+  S = psd_part<D>(S);
+  for (int i = 0; i < D; ++i)
+    for (int k = 0; k < D; ++k) P(i + D * i, k + D * k) = S(i, k);
+  for (int j = 0; j < D; ++j)
+    for (int i = 0; i < j; ++i) {
+      const int x = i + D * j, y = j + D * i;
+      Eigen::Matrix2d T;
+      T << B(x, x), B(x, y), B(y, x), B(y, y);
+      T = psd_part<2>(T);
+      P(x, x) = T(0, 0);
+      P(x, y) = T(0, 1);
+      P(y, x) = T(1, 0);
+      P(y, y) = T(1, 1);
+    }
+  return Q * P * Q.transpose();
 }
 
 }  // namespace detail
@@ -123,7 +185,7 @@ double element_objective_gradient(const Tabulation<Family>& tab,
 /// element_objective_hessian). The forms:
 enum class HessianForm {
   exact,         ///< M_q as above (indefinite in general): derivative checks
-  projected,     ///< M_q replaced by its positive semi-definite part (eigenvalues clamped at 0)
+  projected,     ///< M_q with its part in J = J_P A coordinates replaced by its positive semi-definite part
   gauss_newton,  ///< c_q g g^T: the Gauss-Newton model of the least squares eq 4.10 (PSD, rank one per point)
 };
 
@@ -197,9 +259,14 @@ double element_hessian_data(const Tabulation<Family>& tab,
       data.u[q] = std::sqrt(c) * gv;
     } else {
       const Mat2 K = detail::right_product_matrix<D>(A);
-      Mat2 Mq = c * (gv * gv.transpose() + r * (K.transpose() * h * K));
-      if (form == HessianForm::projected) Mq = detail::psd_part<D2>(Mq);
-      data.M[q] = Mq;
+      if (form == HessianForm::projected) {
+        // Projected in J coordinates, where the measure's isotropy gives the
+        // eigenstructure, then pulled back (congruence keeps it PSD).
+        const Eigen::Map<const Eigen::Matrix<double, D2, 1>> gj(g.data());
+        data.M[q] = K.transpose() * detail::isotropic_psd_part<D>(J, Mat2(c * (gj * gj.transpose() + r * h))) * K;
+      } else {
+        data.M[q] = c * (gv * gv.transpose() + r * (K.transpose() * h * K));
+      }
     }
   }
   grad.noalias() = P * tab.shape_gradients.transpose();
@@ -227,40 +294,53 @@ void apply_element_hessian(const Tabulation<Family>& tab, const ElementHessianDa
   out.noalias() = S * tab.shape_gradients.transpose();
 }
 
+/// W (n x (Dim^2 nq)) with W(i, q Dim^2 + b + Dim d) = G_q(i, b) G_q(i, d): the
+/// element-independent factor of the nodal diagonal blocks (tabulation only).
+template <ElementFamily Family>
+Eigen::MatrixXd diagonal_block_basis(const Tabulation<Family>& tab) {
+  constexpr int D = Family::dim;
+  const int nq = tab.num_points();
+  const int n = tab.num_nodes();
+  Eigen::MatrixXd W(n, D * D * nq);
+  for (int q = 0; q < nq; ++q)
+    for (int d = 0; d < D; ++d)
+      for (int b = 0; b < D; ++b)
+        W.col(q * D * D + b + D * d) = tab.shape_gradients.col(q * D + b).cwiseProduct(tab.shape_gradients.col(q * D + d));
+  return W;
+}
+
 /// The Dim x Dim diagonal blocks of H_e, one per node: column block i of the
-/// result (Dim x (Dim n)) is d^2 f_e / dx_i^2 (for a nodal block-Jacobi preconditioner).
+/// result (Dim x (Dim n)) is d^2 f_e / dx_i^2 (for a nodal block-Jacobi preconditioner),
+///     B_i(a, c) = sum_q sum_{b,d} G_q(i,b) G_q(i,d) M_q(a + D b, c + D d),
+/// computed as one product W * R with W = diagonal_block_basis(tab) and R the
+/// point matrices rearranged ((Dim^2 nq) x Dim^2).
+template <ElementFamily Family>
+void element_hessian_diagonal_blocks(const Tabulation<Family>& tab, const ElementHessianData<Family::dim>& data,
+                                     const Eigen::MatrixXd& W, Eigen::Matrix<double, Family::dim, Eigen::Dynamic>& blocks) {
+  constexpr int D = Family::dim;
+  constexpr int D2 = D * D;
+  const int nq = tab.num_points();
+  const int n = tab.num_nodes();
+  Eigen::Matrix<double, Eigen::Dynamic, D2> R(D2 * nq, D2);
+  for (int q = 0; q < nq; ++q) {
+    const auto Mq = data.point_matrix(q);
+    for (int d = 0; d < D; ++d)
+      for (int b = 0; b < D; ++b)
+        for (int c = 0; c < D; ++c)
+          for (int a = 0; a < D; ++a) R(q * D2 + b + D * d, a + D * c) = Mq(a + D * b, c + D * d);
+  }
+  const Eigen::Matrix<double, Eigen::Dynamic, D2> B = W * R;  // row i: vec(B_i)
+  blocks.resize(D, D * n);
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < D; ++c)
+      for (int a = 0; a < D; ++a) blocks(a, i * D + c) = B(i, a + D * c);
+}
+
+/// The same without a precomputed basis (reference form).
 template <ElementFamily Family>
 void element_hessian_diagonal_blocks(const Tabulation<Family>& tab, const ElementHessianData<Family::dim>& data,
                                      Eigen::Matrix<double, Family::dim, Eigen::Dynamic>& blocks) {
-  constexpr int D = Family::dim;
-  using Mat = Eigen::Matrix<double, D, D>;
-  using Vec = Eigen::Matrix<double, D, 1>;
-  const int nq = tab.num_points();
-  const int n = tab.num_nodes();
-  blocks.setZero(D, D * n);
-  for (int q = 0; q < nq; ++q) {
-    const auto Gq = tab.shape_gradients.template middleCols<D>(q * D);  // n x D
-    if (data.form == HessianForm::gauss_newton) {
-      // H_ii += v v^T with v = U_q G_q(i,:)^T, U_q = unvec(u_q).
-      const Eigen::Map<const Mat> U(data.u[q].data());
-      const Eigen::Matrix<double, D, Eigen::Dynamic> W = U * Gq.transpose();
-      for (int i = 0; i < n; ++i) blocks.template middleCols<D>(i * D).noalias() += W.col(i) * W.col(i).transpose();
-    } else {
-      const auto& Mq = data.M[q];
-      for (int i = 0; i < n; ++i) {
-        const Vec gi = Gq.row(i).transpose();
-        Mat Bi;
-        for (int a = 0; a < D; ++a)
-          for (int c = 0; c < D; ++c) {
-            double s = 0.0;
-            for (int b = 0; b < D; ++b)
-              for (int d = 0; d < D; ++d) s += gi[b] * Mq(a + D * b, c + D * d) * gi[d];
-            Bi(a, c) = s;
-          }
-        blocks.template middleCols<D>(i * D) += Bi;
-      }
-    }
-  }
+  element_hessian_diagonal_blocks<Family>(tab, data, diagonal_block_basis<Family>(tab), blocks);
 }
 
 /// The dense element Hessian ((Dim n) x (Dim n), node-major) from its point data:

@@ -205,4 +205,6 @@ struct GaussSeidel {
   };
 };
 
+static_assert(MeshSolverFor<GaussSeidel, OptimizationProblem<Simplex<2>>>);
+
 }  // namespace hom

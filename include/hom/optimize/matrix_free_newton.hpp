@@ -165,4 +165,6 @@ struct MatrixFreeNewton {
   };
 };
 
+static_assert(MeshSolverFor<MatrixFreeNewton, OptimizationProblem<Simplex<2>>>);
+
 }  // namespace hom

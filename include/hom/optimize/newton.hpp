@@ -130,4 +130,6 @@ struct NewtonSolver {
   };
 };
 
+static_assert(MeshSolverFor<NewtonSolver, OptimizationProblem<Simplex<2>>>);
+
 }  // namespace hom

@@ -101,6 +101,7 @@ struct OptimizeResult {
 /// The general form: explicit solver and continuation policies.
 template <class Measure = ShapeMeasure, QuadraturePolicy Q = DefaultExactness, class Solver, class Continuation,
           ElementFamily Family, NodeSet Nodes, int SpaceDim>
+  requires MeshSolverFor<Solver, OptimizationProblem<Family, Measure>>
 OptimizeResult optimize_with(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMesh<Family>& ideal, const Solver& solver,
                              const Continuation& continuation, const OptimizeOptions& options = {},
                              const Measure& measure = {}) {

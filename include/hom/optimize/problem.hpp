@@ -425,6 +425,8 @@ class OptimizationProblem {
     op.form_ = form;
     op.data_.resize(ne);
     const Tabulation<Family>& tab = *tab_;
+    if (diagonal_basis_.rows() == 0) diagonal_basis_ = diagonal_block_basis<Family>(tab);
+    const Eigen::MatrixXd& W = diagonal_basis_;
     HOM_PARALLEL_FOR_DYNAMIC(threads_)
     for (int e = 0; e < ne; ++e) {
       Eigen::Matrix<double, dim, Eigen::Dynamic> Xe, blocks;
@@ -434,7 +436,7 @@ class OptimizationProblem {
         return element_hessian_data<Family>(tab, Xe, ideals_[e], measure_, reg, form, grad, op.data_[e]);
       });
       Ge.middleCols(Eigen::Index(e) * n, n) = grad;
-      element_hessian_diagonal_blocks<Family>(tab, op.data_[e], blocks);
+      element_hessian_diagonal_blocks<Family>(tab, op.data_[e], W, blocks);
       Be.middleCols(Eigen::Index(e) * n * dim, n * dim) = blocks;
     }
     gather(Ge, g);
@@ -600,6 +602,7 @@ class OptimizationProblem {
   std::vector<NodeIncidence> incidences_;
   mutable std::unique_ptr<HessianPattern> pattern_;
   mutable Eigen::VectorXd gradient_scale_;
+  mutable Eigen::MatrixXd diagonal_basis_;  // diagonal_block_basis(tab), on first use
 };
 
 }  // namespace hom

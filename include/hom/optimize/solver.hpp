@@ -4,8 +4,8 @@
 /// progress reporting, the result, and the outer iteration that ties them to
 /// the element-wise regularization of section 4.2.2.
 ///
-/// Concept MeshSolver. A solver S (a policy: NewtonSolver, MatrixFreeNewton,
-/// GaussSeidel) provides `S::name` and
+/// Concept MeshSolverFor<S, Problem>. A solver S (a policy: NewtonSolver,
+/// MatrixFreeNewton, GaussSeidel) provides `S::name` and
 ///     SolverResult s.solve(OptimizationProblem<F, M>& problem, const SolverOptions&) const;
 /// which moves problem.coordinates() in place. All three are built on
 /// `detail::run_outer_loop` below and so share the stopping rules.
@@ -42,6 +42,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <concepts>
 #include <cstdio>
 #include <deque>
 #include <functional>
@@ -121,6 +122,12 @@ struct SolverResult {
   double time_s = 0.0;
   bool converged = false;
   StopReason reason = StopReason::max_iterations;
+};
+
+template <class S, class Problem>
+concept MeshSolverFor = requires(const S& s, Problem& problem, const SolverOptions& options) {
+  { S::name } -> std::convertible_to<std::string_view>;
+  { s.solve(problem, options) } -> std::same_as<SolverResult>;
 };
 
 /// Backtracking line search (Nocedal & Wright; algorithm B.1): the first

@@ -11,6 +11,8 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "hom/mesh/mesh.hpp"
@@ -61,17 +63,17 @@ IdealVertices<Family> ideal_for(const Mesh<Family, Nodes, Family::dim>& mesh, in
   return kind == IdealKind::regular ? regular_ideal_vertices<Family>() : IdealVertices<Family>(mesh.ideal_vertices(e));
 }
 
-/// Evaluates every element of a planar or volume mesh.
-template <ElementFamily Family, NodeSet Nodes, class Measure>
-MeshQuality mesh_quality(const Mesh<Family, Nodes, Family::dim>& mesh, const Measure& measure, IdealKind kind,
-                         const QuadratureRule<Family::dim>& rule) {
+namespace detail {
+
+template <ElementFamily Family, NodeSet Nodes, class Measure, class IdealOf>
+MeshQuality evaluate_mesh_quality(const Mesh<Family, Nodes, Family::dim>& mesh, const Measure& measure,
+                                  const QuadratureRule<Family::dim>& rule, const IdealOf& ideal_of) {
   const auto& tab = tabulation<Family, Nodes>(mesh.degree(), rule);
   MeshQuality r;
   const int ne = mesh.num_elements();
   r.elements.resize(ne);
 #pragma omp parallel for schedule(dynamic, 16)
-  for (int e = 0; e < ne; ++e)
-    r.elements[e] = element_quality<Family>(tab, mesh.element_coordinates(e), ideal_for(mesh, e, kind), measure);
+  for (int e = 0; e < ne; ++e) r.elements[e] = element_quality<Family>(tab, mesh.element_coordinates(e), ideal_of(e), measure);
   double sum = 0.0, volume = 0.0;
   bool all_valid = true;
   for (const auto& q : r.elements) {
@@ -82,6 +84,26 @@ MeshQuality mesh_quality(const Mesh<Family, Nodes, Family::dim>& mesh, const Mea
   r.mesh_distortion = all_valid ? std::sqrt(sum / volume) : std::numeric_limits<double>::infinity();
   r.mesh_quality = all_valid ? 1.0 / r.mesh_distortion : 0.0;
   return r;
+}
+
+}  // namespace detail
+
+/// Evaluates every element of a planar or volume mesh against the ideal `kind`.
+template <ElementFamily Family, NodeSet Nodes, class Measure>
+MeshQuality mesh_quality(const Mesh<Family, Nodes, Family::dim>& mesh, const Measure& measure, IdealKind kind,
+                         const QuadratureRule<Family::dim>& rule) {
+  return detail::evaluate_mesh_quality(mesh, measure, rule, [&](int e) { return ideal_for(mesh, e, kind); });
+}
+
+/// Evaluates every element against a user-given ideal per element (for
+/// example stretched boundary-layer ideals, IdealMesh::affine).
+template <ElementFamily Family, NodeSet Nodes, class Measure>
+MeshQuality mesh_quality(const Mesh<Family, Nodes, Family::dim>& mesh, const Measure& measure,
+                         const IdealMesh<Family>& ideal, const QuadratureRule<Family::dim>& rule) {
+  if (ideal.size() != mesh.num_elements())
+    throw std::invalid_argument("hom::mesh_quality: the ideal mesh has " + std::to_string(ideal.size()) +
+                                " elements, the mesh " + std::to_string(mesh.num_elements()));
+  return detail::evaluate_mesh_quality(mesh, measure, rule, [&](int e) { return ideal.vertices(e); });
 }
 
 /// Default rule (DefaultExactness) for the mesh's degree.
