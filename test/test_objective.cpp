@@ -118,3 +118,36 @@ TEST_CASE_TEMPLATE("projected element Hessians are positive semi-definite", F, S
     CHECK((grad - grad2).norm() <= 1e-13 * (1 + grad.norm()));
   }
 }
+
+TEST_CASE_TEMPLATE("the isotropic projection is the positive semi-definite part, pulled back", M, ShapeMeasure, OddyMeasure) {
+  // For an isotropic measure, the block-wise projection in the SVD basis of J
+  // (detail::isotropic_psd_pullback) must equal K^T psd(M) K computed with a
+  // full Dim^2 x Dim^2 eigensolver, for any J (valid or inverted) and ideal A.
+  std::mt19937 rng(17);
+  std::normal_distribution<double> normal;
+  auto check = [&](auto dim_tag) {
+    constexpr int D = decltype(dim_tag)::value;
+    using Mat = Eigen::Matrix<double, D, D>;
+    using Mat2 = Eigen::Matrix<double, D * D, D * D>;
+    for (int trial = 0; trial < 20; ++trial) {
+      Mat J, A;
+      for (int i = 0; i < D; ++i)
+        for (int j = 0; j < D; ++j) {
+          J(i, j) = (i == j) + 0.6 * normal(rng);
+          A(i, j) = (i == j) + 0.3 * normal(rng);
+        }
+      const RegularizedDeterminant reg{0.05};
+      Mat g;
+      Mat2 h;
+      const double eta = M{}.value_gradient_hessian(J, reg, g, h);
+      const Eigen::Map<const Eigen::Matrix<double, D * D, 1>> gv(g.data());
+      const Mat2 Mj = 0.7 * (gv * gv.transpose() + (eta - 1.0) * h);
+      const Mat2 K = detail::right_product_matrix<D>(A);
+      const Mat2 reference = K.transpose() * detail::psd_part<D * D>(Mj) * K;
+      const Mat2 fast = detail::isotropic_psd_pullback<D>(J, Mj, A);
+      CHECK((fast - reference).norm() <= 1e-9 * (1.0 + reference.norm()));
+    }
+  };
+  check(std::integral_constant<int, 2>{});
+  check(std::integral_constant<int, 3>{});
+}

@@ -377,7 +377,9 @@ struct RandomMap {
     }
   }
 
-  double det(const Eigen::Matrix<double, D, 1>& x) const {
+  double det(const Eigen::Matrix<double, D, 1>& x) const { return jacobian(x).determinant(); }
+
+  Eigen::Matrix<double, D, D> jacobian(const Eigen::Matrix<double, D, 1>& x) const {
     Eigen::Matrix<double, D, D> J = Eigen::Matrix<double, D, D>::Identity();
     for (std::size_t m = 0; m < as.size(); ++m)
       for (int j = 0; j < D; ++j) {
@@ -386,7 +388,7 @@ struct RandomMap {
         for (int d = 0; d < D; ++d) v *= std::pow(x[d], d == j ? as[m][d] - 1 : as[m][d]);
         J.col(j) += v * coef[m];
       }
-    return J.determinant();
+    return J;
   }
 };
 
@@ -402,6 +404,7 @@ double integrate(const QuadratureRule<D>& rule, G&& g) {
 TEST_CASE_TEMPLATE("policies: documented degrees and what they integrate", F, HOM_FAMILIES) {
   static_assert(QuadraturePolicy<ThesisExactness>);
   static_assert(QuadraturePolicy<DefaultExactness>);
+  static_assert(QuadraturePolicy<ReducedExactness>);
   std::mt19937 rng(12345);
   const int pmax = F::dim == 2 ? 6 : 4;
   for (int p = 1; p <= pmax; ++p) {
@@ -414,8 +417,13 @@ TEST_CASE_TEMPLATE("policies: documented degrees and what they integrate", F, HO
 
     const auto& rt = quadrature_for<F, ThesisExactness>(p);
     const auto& rd = quadrature_for<F>(p);  // DefaultExactness
+    const auto& rr = quadrature_for<F, ReducedExactness>(p);
     CHECK(rt.exactness >= thesis);
     CHECK(rd.exactness >= dflt);
+    CHECK(rr.exactness >= ReducedExactness::exactness<F>(p));
+    CHECK(rr.size() <= rd.size());
+    // p + 1 points per direction (collapsed Gauss-Jacobi or tensor Gauss).
+    CHECK(rr.size() == int(std::pow(p + 1, F::dim)));
 
     // Reference: a rule far beyond the degree of (det D phi)^2.
     const int det_degree = F::is_simplex ? F::dim * (p - 1) : F::dim * p - 1;
@@ -427,6 +435,9 @@ TEST_CASE_TEMPLATE("policies: documented degrees and what they integrate", F, HO
       // Thesis policy integrates (det D phi)^2 exactly; the default, det D phi.
       CHECK(integrate(rt, det2) == doctest::Approx(integrate(ref, det2)).epsilon(1e-12));
       CHECK(integrate(rd, det) == doctest::Approx(integrate(ref, det)).epsilon(1e-12));
+      // The reduced policy integrates |D phi|^2, the shape measure's numerator.
+      auto frobenius2 = [&](const auto& x) { return map.jacobian(x).squaredNorm(); };
+      CHECK(integrate(rr, frobenius2) == doctest::Approx(integrate(ref, frobenius2)).epsilon(1e-12));
     }
   }
 }

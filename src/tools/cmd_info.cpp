@@ -15,6 +15,7 @@
 #include "command.hpp"
 #include "hom/mesh/topology.hpp"
 #include "mesh_io.hpp"
+#include "options.hpp"
 
 namespace po = boost::program_options;
 
@@ -30,23 +31,8 @@ std::string type_name(int type) {
 int run(int argc, char** argv) {
   po::options_description opts("hom info MESH\n\nDescribe a Gmsh .msh file.\n\noptions");
   opts.add_options()("help,h", "show this help");
-  po::options_description hidden;
-  hidden.add_options()("mesh", po::value<std::string>());
-  po::options_description all;
-  all.add(opts).add(hidden);
-  po::positional_options_description pos;
-  pos.add("mesh", 1);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(argc, argv).options(all).positional(pos).run(), vm);
-    po::notify(vm);
-  } catch (const po::error& e) {
-    throw hom::tools::UsageError(std::string("info: ") + e.what());
-  }
-  if (vm.count("help")) {
-    std::cout << opts << "\n";
-    return 0;
-  }
+  if (!hom::tools::parse_options("info", argc, argv, opts, {{"mesh", po::value<std::string>()}}, vm)) return 0;
   if (!vm.count("mesh")) throw hom::tools::UsageError("info: need a mesh file (see 'hom info --help')");
   const std::string path = vm["mesh"].as<std::string>();
   const auto data = hom::io::read_msh_data(path);

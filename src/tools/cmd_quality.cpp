@@ -18,6 +18,7 @@
 #include "hom/measure/shape_measure.hpp"
 #include "hom/quality/mesh_quality.hpp"
 #include "mesh_io.hpp"
+#include "options.hpp"
 
 namespace po = boost::program_options;
 
@@ -92,23 +93,8 @@ int run(int argc, char** argv) {
        "quadrature: default | thesis (exact to degree 6p-3)")                                   //
       ("vtu", po::value(&o.vtu), "write a VTU colored by quality (ParaView)")                    //
       ("json", po::value(&o.json), "write the statistics as JSON");
-  po::options_description hidden;
-  hidden.add_options()("mesh", po::value(&o.path));
-  po::options_description all;
-  all.add(opts).add(hidden);
-  po::positional_options_description pos;
-  pos.add("mesh", 1);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(argc, argv).options(all).positional(pos).run(), vm);
-    po::notify(vm);
-  } catch (const po::error& e) {
-    throw hom::tools::UsageError(std::string("quality: ") + e.what());
-  }
-  if (vm.count("help")) {
-    std::cout << opts << "\n";
-    return 0;
-  }
+  if (!hom::tools::parse_options("quality", argc, argv, opts, {{"mesh", po::value(&o.path)}}, vm)) return 0;
   if (o.path.empty()) throw hom::tools::UsageError("quality: need a mesh file (see 'hom quality --help')");
   if (o.measure != "shape" && o.measure != "oddy")
     throw hom::tools::UsageError("quality: --measure must be shape or oddy, got '" + o.measure + "'");

@@ -10,6 +10,8 @@
 /// GEMM parallelisation (enabled by -fopenmp) would choose its blocking by
 /// thread count; `SerialEigenScope` switches it off while hom computes.
 
+#include <algorithm>
+
 #include <Eigen/Core>
 
 #if defined(_OPENMP)
@@ -24,6 +26,8 @@
 #define HOM_PARALLEL_FOR(threads) HOM_PRAGMA(omp parallel for schedule(static) num_threads(threads))
 /// The same with dynamic scheduling, for loops whose iterations differ in cost.
 #define HOM_PARALLEL_FOR_DYNAMIC(threads) HOM_PRAGMA(omp parallel for schedule(dynamic, 16) num_threads(threads))
+/// One iteration at a time, for a few expensive iterations (blocks of elements).
+#define HOM_PARALLEL_FOR_EACH(threads) HOM_PRAGMA(omp parallel for schedule(dynamic, 1) num_threads(threads))
 
 namespace hom::detail {
 
@@ -35,6 +39,15 @@ inline int resolve_threads(int threads) {
 #else
   return 1;
 #endif
+}
+
+/// Threads worth starting for `items` independent work items of which one
+/// thread should get at least `grain`: between 1 and `threads`. Small problems
+/// run on one thread: waking OpenMP's team costs more than they do, and on a
+/// loaded machine its spinning threads slowed an 8-dof solve a thousandfold.
+inline int useful_threads(int threads, long long items, long long grain) {
+  const long long n = grain > 0 ? items / grain : items;
+  return int(std::max<long long>(1, std::min<long long>(threads, n)));
 }
 
 /// Eigen single-threaded for the lifetime of the scope (restored after).

@@ -3,7 +3,7 @@
 /// p-continuation (appendix C): a better starting configuration for the
 /// high-order optimization when the mesh is badly tangled.
 ///
-/// Policies (concept: `name` and `run<Quadrature>(mesh, ideal, solver, options, threads, measure)`
+/// Policies (concept: `name` and `run<Quadrature>(mesh, ideal, options, threads, measure, alpha)`
 /// returning std::optional<SolverResult>, empty when nothing was done):
 ///   - NoContinuation: nothing.
 ///   - LinearSubMeshContinuation: the three steps of appendix C.
@@ -16,7 +16,8 @@
 ///       2. If the linear sub-mesh has inverted sub-elements (an untangled
 ///          linear sub-mesh is necessary for a valid high-order mesh), optimize
 ///          it as a p = 1 problem with the same measure, regularization and
-///          solver, and the same fixed nodes (one quadrature point per
+///          fixed nodes and the policy's solver (`solver`, Gauss-Seidel by
+///          default) (one quadrature point per
 ///          simplex, whose Jacobian is constant). Otherwise do nothing: "we only
 ///          apply our procedure when this necessary condition is not hold".
 ///       3. The high-order mesh takes the optimized node positions (the
@@ -32,6 +33,7 @@
 #include "hom/mesh/mesh.hpp"
 #include "hom/optimize/mesh_problem.hpp"
 #include "hom/optimize/problem.hpp"
+#include "hom/optimize/solve.hpp"
 #include "hom/optimize/solver.hpp"
 #include "hom/quadrature/quadrature_policy.hpp"
 
@@ -40,9 +42,9 @@ namespace hom {
 struct NoContinuation {
   static constexpr std::string_view name = "none";
 
-  template <QuadraturePolicy Q, class Solver, class Measure, ElementFamily Family, NodeSet Nodes, int SpaceDim>
-  std::optional<SolverResult> run(Mesh<Family, Nodes, SpaceDim>&, const IdealMesh<Family>&, const Solver&, const SolverOptions&,
-                                  int, const Measure&, double = thesis_regularization_alpha) const {
+  template <QuadraturePolicy Q, class Measure, ElementFamily Family, NodeSet Nodes, int SpaceDim>
+  std::optional<SolverResult> run(Mesh<Family, Nodes, SpaceDim>&, const IdealMesh<Family>&, const SolverOptions&, int,
+                                  const Measure&, double = thesis_regularization_alpha) const {
     return std::nullopt;
   }
 };
@@ -82,9 +84,10 @@ OptimizationProblem<Family, Measure> make_linear_sub_problem(const Mesh<Family, 
 
 struct LinearSubMeshContinuation {
   static constexpr std::string_view name = "linear-sub-mesh";
+  SolverKind solver = SolverKind::gauss_seidel;  ///< solver of the linear stage
 
-  template <QuadraturePolicy Q, class Solver, class Measure, ElementFamily Family, NodeSet Nodes, int SpaceDim>
-  std::optional<SolverResult> run(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMesh<Family>& ideal, const Solver& solver,
+  template <QuadraturePolicy Q, class Measure, ElementFamily Family, NodeSet Nodes, int SpaceDim>
+  std::optional<SolverResult> run(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMesh<Family>& ideal,
                                   const SolverOptions& options, int threads, const Measure& measure,
                                   double regularization_alpha = thesis_regularization_alpha) const {
     if (mesh.degree() == 1) return std::nullopt;
@@ -92,7 +95,7 @@ struct LinearSubMeshContinuation {
     sub.set_threads(threads);
     sub.set_regularization_alpha(regularization_alpha);
     if (sub.status(sub.coordinates()).all_valid()) return std::nullopt;
-    SolverResult r = solver.solve(sub, options);
+    SolverResult r = solve_with(solver, sub, options);
     mesh.nodes() = sub.coordinates();
     return r;
   }

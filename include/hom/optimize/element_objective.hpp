@@ -80,31 +80,42 @@ Eigen::Matrix<double, N, N> psd_part(const Eigen::Matrix<double, N, N>& M) {
   return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
 }
 
-// The positive semi-definite part of M, the second derivative with respect to
-// J (flattened column-major) of a function of J that is isotropic,
-// phi(R1 J R2) = phi(J) for rotations R1, R2 (every distortion measure, and
-// c (eta - 1)^2 / 2 built from one). With J = U S V^T (SVD), such a Hessian is
-// block diagonal in the basis vec(U E_ij V^T) (Smith, De Goes & Kim 2019,
-// "Analytic eigensystems for isotropic distortion energies"): one Dim x Dim
-// block on the "stretch" directions E_ii and a 2 x 2 block on each pair
-// (E_ij, E_ji). Projecting the blocks costs a fraction of a Dim^2 x Dim^2
-// eigensolver. If M is not block diagonal in that basis (a measure that is
-// not isotropic), the full eigensolver is used.
+// Kronecker product X (x) Y of D x D matrices in the column-major vec
+// convention: vec(Y E X^T) = (X (x) Y) vec(E), entry (a + D b, c + D d) = X(b, d) Y(a, c).
 template <int D>
-Eigen::Matrix<double, D * D, D * D> isotropic_psd_part(const Eigen::Matrix<double, D, D>& J,
-                                                      const Eigen::Matrix<double, D * D, D * D>& M) {
+Eigen::Matrix<double, D * D, D * D> kronecker(const Eigen::Matrix<double, D, D>& X, const Eigen::Matrix<double, D, D>& Y) {
+  Eigen::Matrix<double, D * D, D * D> K;
+  for (int d = 0; d < D; ++d)
+    for (int b = 0; b < D; ++b) K.template block<D, D>(D * b, D * d) = X(b, d) * Y;
+  return K;
+}
+
+// K^T M+ K, with M+ the positive semi-definite part of M, the second
+// derivative with respect to J (flattened column-major) of a function of J
+// that is isotropic, phi(R1 J R2) = phi(J) for rotations R1, R2 (every
+// distortion measure, and c (eta - 1)^2 / 2 built from one), and
+// K = A^T (x) I (vec(J_P A) = K vec(J_P)), the pull back to J_P.
+//
+// With J = U S V^T (SVD), such a Hessian is block diagonal in the basis
+// Q = V (x) U, column i + D j = vec(u_i v_j^T) (Smith, De Goes & Kim 2019,
+// "Analytic eigensystems for isotropic distortion energies"): one D x D block
+// on the "stretch" directions E_ii and a 2 x 2 block on each pair (E_ij, E_ji).
+// So M+ = Q P Q^T with P the blocks of B = Q^T M Q projected one by one, and
+//     K^T M+ K = R^T P R,   R = Q^T K = (A V)^T (x) U^T,
+// where P has at most D non-zeros per row: a few hundred flops instead of the
+// dense 9 x 9 products and a 9 x 9 eigensolver. If M is not block diagonal in
+// that basis (a measure that is not isotropic), the full eigensolver is used.
+template <int D>
+Eigen::Matrix<double, D * D, D * D> isotropic_psd_pullback(const Eigen::Matrix<double, D, D>& J,
+                                                           const Eigen::Matrix<double, D * D, D * D>& M,
+                                                           const Eigen::Matrix<double, D, D>& A) {
   constexpr int D2 = D * D;
   using Mat = Eigen::Matrix<double, D, D>;
   using Mat2 = Eigen::Matrix<double, D2, D2>;
   const Eigen::JacobiSVD<Mat> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Mat& U = svd.matrixU();
   const Mat& V = svd.matrixV();
-  // Column i + D j of Q is vec(u_i v_j^T).
-  Mat2 Q;
-  for (int j = 0; j < D; ++j)
-    for (int i = 0; i < D; ++i)
-      for (int b = 0; b < D; ++b)
-        for (int a = 0; a < D; ++a) Q(a + D * b, i + D * j) = U(a, i) * V(b, j);
+  const Mat2 Q = kronecker<D>(V, U);
   const Mat2 B = Q.transpose() * M * Q;
   // Block of each flattened index: 0 for the stretch block, 1 + pair number otherwise.
   std::array<int, D2> block{};
@@ -114,26 +125,29 @@ Eigen::Matrix<double, D * D, D * D> isotropic_psd_part(const Eigen::Matrix<doubl
   for (int c = 0; c < D2; ++c)
     for (int r = 0; r < D2; ++r)
       if (block[r] != block[c]) off = std::max(off, std::abs(B(r, c)));
-  if (off > 1e-10 * B.cwiseAbs().maxCoeff()) return psd_part<D2>(M);
-  Mat2 P = Mat2::Zero();
+  const Mat2 K = kronecker<D>(A.transpose(), Mat::Identity());
+  if (off > 1e-10 * B.cwiseAbs().maxCoeff()) return K.transpose() * psd_part<D2>(M) * K;
+  const Mat2 R = kronecker<D>(Mat((A * V).transpose()), Mat(U.transpose()));
+  Mat2 PR;  // P R, row by row from P's blocks
   Mat S;
   for (int i = 0; i < D; ++i)
     for (int k = 0; k < D; ++k) S(i, k) = B(i + D * i, k + D * k);
   S = psd_part<D>(S);
-  for (int i = 0; i < D; ++i)
-    for (int k = 0; k < D; ++k) P(i + D * i, k + D * k) = S(i, k);
+  for (int i = 0; i < D; ++i) {
+    PR.row(i + D * i).setZero();
+    for (int k = 0; k < D; ++k) PR.row(i + D * i) += S(i, k) * R.row(k + D * k);
+  }
   for (int j = 0; j < D; ++j)
     for (int i = 0; i < j; ++i) {
       const int x = i + D * j, y = j + D * i;
       Eigen::Matrix2d T;
       T << B(x, x), B(x, y), B(y, x), B(y, y);
       T = psd_part<2>(T);
-      P(x, x) = T(0, 0);
-      P(x, y) = T(0, 1);
-      P(y, x) = T(1, 0);
-      P(y, y) = T(1, 1);
+      const Eigen::Matrix<double, 1, D2> rx = R.row(x), ry = R.row(y);
+      PR.row(x) = T(0, 0) * rx + T(0, 1) * ry;
+      PR.row(y) = T(1, 0) * rx + T(1, 1) * ry;
     }
-  return Q * P * Q.transpose();
+  return R.transpose() * PR;
 }
 
 }  // namespace detail
@@ -207,29 +221,86 @@ struct ElementHessianData {
 
 namespace detail {
 
+/// Relative shift under which a point's second-order matrix counts as positive
+/// semi-definite without projecting it (point_second_order).
+inline constexpr double psd_shift = 1e-3;
+
 /// K with vec(J_P A) = K vec(J_P), K = A^T (x) I: K(a + D b, c + D d) = A(d, b) delta_ac.
 template <int D>
 Eigen::Matrix<double, D * D, D * D> right_product_matrix(const Eigen::Matrix<double, D, D>& A) {
-  Eigen::Matrix<double, D * D, D * D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
-  for (int b = 0; b < D; ++b)
-    for (int d = 0; d < D; ++d)
-      for (int a = 0; a < D; ++a) K(a + D * b, a + D * d) = A(d, b);
-  return K;
+  return kronecker<D>(A.transpose(), Eigen::Matrix<double, D, D>::Identity());
 }
 
 }  // namespace detail
 
+/// What point_second_order returns: the residual eta - 1 and d eta / d J_P.
+template <int Dim>
+struct PointSecondOrder {
+  double residual = 0.0;
+  Eigen::Matrix<double, Dim, Dim> gradient;
+};
+
+/// One quadrature point's share of f_e's second-order model in J_P coordinates,
+/// M_q of HessianForm `form`, written to `data`: sqrt(c) vec(d eta / d J_P)
+/// (Dim^2 numbers) for Gauss-Newton, M_q column-major (Dim^4 numbers)
+/// otherwise. J = J_P A is the point's Jacobian relative to the ideal, c its
+/// weight c_q. The measure's Hessian is not evaluated for Gauss-Newton.
+template <int D, class Measure, class Reg>
+PointSecondOrder<D> point_second_order(const Measure& measure, const Reg& reg, const Eigen::Matrix<double, D, D>& J,
+                                       const Eigen::Matrix<double, D, D>& A, double c, HessianForm form, double* data) {
+  constexpr int D2 = D * D;
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Mat2 = Eigen::Matrix<double, D2, D2>;
+  Mat g;
+  Mat2 h;
+  const double eta = form == HessianForm::gauss_newton ? measure.value_gradient(J, reg, g) : measure.value_gradient_hessian(J, reg, g, h);
+  PointSecondOrder<D> out;
+  out.residual = eta - 1.0;
+  out.gradient.noalias() = g * A.transpose();  // d eta / d J_P
+  const Eigen::Map<const Eigen::Matrix<double, D2, 1>> gv(out.gradient.data());
+  if (form == HessianForm::gauss_newton) {
+    Eigen::Map<Eigen::Matrix<double, D2, 1>> u(data);
+    u = std::sqrt(c) * gv;
+    return out;
+  }
+  Eigen::Map<Mat2> M(data);
+  if (form == HessianForm::projected) {
+    // Projected in J coordinates, where the measure's isotropy gives the
+    // eigenstructure, then pulled back (congruence keeps it PSD).
+    const Eigen::Map<const Eigen::Matrix<double, D2, 1>> gj(g.data());
+    Mat2 MJ = c * (gj * gj.transpose() + out.residual * h);
+    // Most points of a mesh being smoothed are nearly ideal, where M is
+    // positive semi-definite up to eigenvalues of size |J - R|^3 along the
+    // measure's near-null directions (rotations, scaling). A Cholesky
+    // factorization of M shifted by psd_shift * trace(M) / Dim^2 accepts
+    // those for a few hundred flops; the shifted matrix (a Levenberg-Marquardt
+    // term of relative size psd_shift) is used as is. Only the other points pay
+    // for the SVD-based projection.
+    const double shift = detail::psd_shift * MJ.trace() / D2;
+    MJ.diagonal().array() += shift;
+    if (shift > 0.0 && Eigen::LLT<Mat2>(MJ).info() == Eigen::Success) {
+      const Mat2 K = detail::right_product_matrix<D>(A);
+      M.noalias() = K.transpose() * MJ * K;
+    } else {
+      MJ.diagonal().array() -= shift;
+      M = detail::isotropic_psd_pullback<D>(J, MJ, A);
+    }
+  } else {
+    const Mat2 K = detail::right_product_matrix<D>(A);
+    M.noalias() = c * (gv * gv.transpose() + out.residual * (K.transpose() * h * K));
+  }
+  return out;
+}
+
 /// f_e, its gradient (Dim x n) and the second-order data of `form` at every
-/// quadrature point. The measure's Hessian is not evaluated for Gauss-Newton.
+/// quadrature point.
 template <ElementFamily Family, class Measure, DeterminantRegularization Reg>
 double element_hessian_data(const Tabulation<Family>& tab,
                             const Eigen::Ref<const Eigen::Matrix<double, Family::dim, Eigen::Dynamic>>& X,
                             const IdealAtPoints<Family::dim>& ideal, const Measure& measure, const Reg& reg,
                             HessianForm form, ElementGradient<Family::dim>& grad, ElementHessianData<Family::dim>& data) {
   constexpr int D = Family::dim;
-  constexpr int D2 = D * D;
   using Mat = Eigen::Matrix<double, D, D>;
-  using Mat2 = Eigen::Matrix<double, D2, D2>;
   const int nq = tab.num_points();
   const Eigen::Matrix<double, D, Eigen::Dynamic> JP = X * tab.shape_gradients;
   Eigen::Matrix<double, D, Eigen::Dynamic> P(D, D * nq);
@@ -245,29 +316,10 @@ double element_hessian_data(const Tabulation<Family>& tab,
   for (int q = 0; q < nq; ++q) {
     const Mat& A = ideal.inverse_jacobian[q];
     const double c = ideal.weight[q];
-    const Mat J = JP.template middleCols<D>(q * D) * A;
-    Mat g;
-    Mat2 h;
-    const double eta = form == HessianForm::gauss_newton ? measure.value_gradient(J, reg, g)
-                                                         : measure.value_gradient_hessian(J, reg, g, h);
-    const double r = eta - 1.0;
-    f += 0.5 * c * r * r;
-    const Mat gp = g * A.transpose();  // d eta / d J_P
-    P.template middleCols<D>(q * D) = (c * r) * gp;
-    const Eigen::Map<const Eigen::Matrix<double, D2, 1>> gv(gp.data());
-    if (form == HessianForm::gauss_newton) {
-      data.u[q] = std::sqrt(c) * gv;
-    } else {
-      const Mat2 K = detail::right_product_matrix<D>(A);
-      if (form == HessianForm::projected) {
-        // Projected in J coordinates, where the measure's isotropy gives the
-        // eigenstructure, then pulled back (congruence keeps it PSD).
-        const Eigen::Map<const Eigen::Matrix<double, D2, 1>> gj(g.data());
-        data.M[q] = K.transpose() * detail::isotropic_psd_part<D>(J, Mat2(c * (gj * gj.transpose() + r * h))) * K;
-      } else {
-        data.M[q] = c * (gv * gv.transpose() + r * (K.transpose() * h * K));
-      }
-    }
+    double* out = form == HessianForm::gauss_newton ? data.u[q].data() : data.M[q].data();
+    const auto pd = point_second_order<D>(measure, reg, Mat(JP.template middleCols<D>(q * D) * A), A, c, form, out);
+    f += 0.5 * c * pd.residual * pd.residual;
+    P.template middleCols<D>(q * D) = (c * pd.residual) * pd.gradient;
   }
   grad.noalias() = P * tab.shape_gradients.transpose();
   return f;
@@ -295,7 +347,8 @@ void apply_element_hessian(const Tabulation<Family>& tab, const ElementHessianDa
 }
 
 /// W (n x (Dim^2 nq)) with W(i, q Dim^2 + b + Dim d) = G_q(i, b) G_q(i, d): the
-/// element-independent factor of the nodal diagonal blocks (tabulation only).
+/// element-independent factor of the nodal diagonal blocks (tabulation only):
+/// the block of node i is B_i(a, c) = sum_q sum_{b,d} W(i, q Dim^2 + b + Dim d) M_q(a + Dim b, c + Dim d).
 template <ElementFamily Family>
 Eigen::MatrixXd diagonal_block_basis(const Tabulation<Family>& tab) {
   constexpr int D = Family::dim;
@@ -307,40 +360,6 @@ Eigen::MatrixXd diagonal_block_basis(const Tabulation<Family>& tab) {
       for (int b = 0; b < D; ++b)
         W.col(q * D * D + b + D * d) = tab.shape_gradients.col(q * D + b).cwiseProduct(tab.shape_gradients.col(q * D + d));
   return W;
-}
-
-/// The Dim x Dim diagonal blocks of H_e, one per node: column block i of the
-/// result (Dim x (Dim n)) is d^2 f_e / dx_i^2 (for a nodal block-Jacobi preconditioner),
-///     B_i(a, c) = sum_q sum_{b,d} G_q(i,b) G_q(i,d) M_q(a + D b, c + D d),
-/// computed as one product W * R with W = diagonal_block_basis(tab) and R the
-/// point matrices rearranged ((Dim^2 nq) x Dim^2).
-template <ElementFamily Family>
-void element_hessian_diagonal_blocks(const Tabulation<Family>& tab, const ElementHessianData<Family::dim>& data,
-                                     const Eigen::MatrixXd& W, Eigen::Matrix<double, Family::dim, Eigen::Dynamic>& blocks) {
-  constexpr int D = Family::dim;
-  constexpr int D2 = D * D;
-  const int nq = tab.num_points();
-  const int n = tab.num_nodes();
-  Eigen::Matrix<double, Eigen::Dynamic, D2> R(D2 * nq, D2);
-  for (int q = 0; q < nq; ++q) {
-    const auto Mq = data.point_matrix(q);
-    for (int d = 0; d < D; ++d)
-      for (int b = 0; b < D; ++b)
-        for (int c = 0; c < D; ++c)
-          for (int a = 0; a < D; ++a) R(q * D2 + b + D * d, a + D * c) = Mq(a + D * b, c + D * d);
-  }
-  const Eigen::Matrix<double, Eigen::Dynamic, D2> B = W * R;  // row i: vec(B_i)
-  blocks.resize(D, D * n);
-  for (int i = 0; i < n; ++i)
-    for (int c = 0; c < D; ++c)
-      for (int a = 0; a < D; ++a) blocks(a, i * D + c) = B(i, a + D * c);
-}
-
-/// The same without a precomputed basis (reference form).
-template <ElementFamily Family>
-void element_hessian_diagonal_blocks(const Tabulation<Family>& tab, const ElementHessianData<Family::dim>& data,
-                                     Eigen::Matrix<double, Family::dim, Eigen::Dynamic>& blocks) {
-  element_hessian_diagonal_blocks<Family>(tab, data, diagonal_block_basis<Family>(tab), blocks);
 }
 
 /// The dense element Hessian ((Dim n) x (Dim n), node-major) from its point data:

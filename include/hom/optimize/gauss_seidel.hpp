@@ -77,7 +77,7 @@ struct GaussSeidel {
       jacobians.resize(ne);
       const auto& tab = problem.tabulation();
       const auto& X = problem.coordinates();
-      HOM_PARALLEL_FOR(problem.threads())
+      HOM_PARALLEL_FOR(detail::useful_threads(problem.threads(), ne, 64))
       for (int e = 0; e < ne; ++e) {
         Eigen::Matrix<double, D, Eigen::Dynamic> Xe;
         problem.element_coordinates(X, e, Xe);
@@ -186,7 +186,7 @@ struct GaussSeidel {
       std::vector<int> result(problem.num_nodes(), -1);
       for (const auto& group : colors.groups) {
         const int size = int(group.size());
-        HOM_PARALLEL_FOR_DYNAMIC(problem.threads())
+        HOM_PARALLEL_FOR_DYNAMIC(detail::useful_threads(problem.threads(), size, 64))
         for (int k = 0; k < size; ++k) result[group[k]] = relax_node(problem, group[k]);
       }
       int moved = 0, backtracks = 0;

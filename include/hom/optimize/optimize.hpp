@@ -33,44 +33,44 @@
 #include "hom/optimize/matrix_free_newton.hpp"
 #include "hom/optimize/mesh_problem.hpp"
 #include "hom/optimize/newton.hpp"
+#include "hom/optimize/solve.hpp"
 #include "hom/optimize/solver.hpp"
 #include "hom/quadrature/quadrature_policy.hpp"
 #include "hom/quality/ideal.hpp"
 
 namespace hom {
 
-enum class SolverKind {
-  newton,              ///< NewtonSolver: assembled sparse Hessian (small and medium meshes)
-  matrix_free_newton,  ///< MatrixFreeNewton: truncated Newton-CG (large meshes, high p)
-  gauss_seidel,        ///< GaussSeidel: non-linear Gauss-Seidel of appendix B (low memory)
-};
-
-inline std::string_view to_string(SolverKind k) {
-  switch (k) {
-    case SolverKind::newton: return "newton";
-    case SolverKind::matrix_free_newton: return "matrix-free-newton";
-    case SolverKind::gauss_seidel: return "gauss-seidel";
-  }
-  return "unknown";
-}
-
-inline SolverKind parse_solver_kind(const std::string& s) {
-  if (s == "newton") return SolverKind::newton;
-  if (s == "matrix-free" || s == "matrix-free-newton" || s == "newton-cg" || s == "cg") return SolverKind::matrix_free_newton;
-  if (s == "gauss-seidel" || s == "gs") return SolverKind::gauss_seidel;
-  throw std::invalid_argument("unknown solver '" + s + "' (expected newton, matrix-free or gauss-seidel)");
-}
-
 struct OptimizeOptions {
   SolverKind solver = SolverKind::newton;
   IdealKind ideal = IdealKind::straight_sided;
   bool p_continuation = false;  ///< appendix C: untangle the linear sub-mesh first when it is tangled
+  /// Solver of the linear sub-mesh stage. Non-linear Gauss-Seidel by default:
+  /// its local moves untangle a randomly tangled linear sub-mesh in a few
+  /// sweeps (bench_untangle, p = 5: valid after 4 sweeps), where the global
+  /// Newton-type solvers take tens of short steps.
+  SolverKind continuation_solver = SolverKind::gauss_seidel;
+  /// Stop the linear stage once its sub-mesh has stayed valid this many
+  /// iterations (SolverOptions::iterations_after_valid); < 0 (default): run it
+  /// to convergence, as appendix C does. Converging pays off on small meshes
+  /// (the degree-4 ring of figure C.2: 26 linear + 6 Newton iterations, against
+  /// 12 + 33 when stopping 3 iterations after validity, bench_ring); on large
+  /// ones a few sweeps after untangling can be enough for a valid high-order
+  /// start (bench_untangle, p = 5: 3 Gauss-Seidel sweeps after validity gave a
+  /// valid degree-5 mesh of minimum quality 0.88; stopping right at validity
+  /// left 38 elements inverted).
+  int continuation_iterations_after_valid = -1;
+  /// Second-order model of the Newton-type solvers (HessianForm::projected or
+  /// gauss_newton; exact only for derivative checks).
+  HessianForm hessian = HessianForm::projected;
   int threads = 0;              ///< <= 0: OpenMP's default
   int max_iterations = 200;     ///< per stage (linear sub-mesh, high order)
   double gradient_tolerance = 1e-8;
-  double objective_tolerance = 1e-10;
-  double quality_tolerance = 1e-6;
-  int stagnation_window = 5;
+  double objective_tolerance = 1e-6;
+  double quality_tolerance = 1e-3;
+  int stagnation_window = 3;
+  /// Stop the high-order stage as soon as every element is valid with minimum
+  /// quality >= target_quality (<= 0: off, optimize to convergence).
+  double target_quality = 0.0;
   double regularization_alpha = thesis_regularization_alpha;  ///< alpha of eq 4.13
   bool verbose = false;
   std::function<void(const IterationInfo&)> on_iteration;
@@ -82,6 +82,7 @@ struct OptimizeOptions {
     o.objective_tolerance = objective_tolerance;
     o.quality_tolerance = quality_tolerance;
     o.stagnation_window = stagnation_window;
+    o.target_quality = target_quality;
     o.verbose = verbose;
     o.on_iteration = on_iteration;
     return o;
@@ -107,9 +108,15 @@ OptimizeResult optimize_with(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMes
                              const Measure& measure = {}) {
   static_assert(SpaceDim == Family::dim, "hom::optimize: surface meshes are optimized in parametric space (chapter 5)");
   const auto start = std::chrono::steady_clock::now();
-  const SolverOptions so = options.solver_options();
+  SolverOptions so = options.solver_options();
+  so.stage = "high-order";
   OptimizeResult out;
-  out.continuation = continuation.template run<Q>(mesh, ideal, solver, so, options.threads, measure, options.regularization_alpha);
+  SolverOptions linear_options = so;
+  linear_options.iterations_after_valid = options.continuation_iterations_after_valid;
+  linear_options.target_quality = 0.0;  // the linear sub-mesh's quality is not the mesh's
+  linear_options.stage = "linear";
+  out.continuation =
+      continuation.template run<Q>(mesh, ideal, linear_options, options.threads, measure, options.regularization_alpha);
   auto problem = make_problem<Measure, Q>(mesh, ideal, measure);
   problem.set_threads(options.threads);
   problem.set_regularization_alpha(options.regularization_alpha);
@@ -125,12 +132,13 @@ OptimizeResult optimize(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMesh<Fam
                         const Measure& measure = {}) {
   auto with_continuation = [&](const auto& solver) {
     if (options.p_continuation)
-      return optimize_with<Measure, Q>(mesh, ideal, solver, LinearSubMeshContinuation{}, options, measure);
+      return optimize_with<Measure, Q>(mesh, ideal, solver, LinearSubMeshContinuation{options.continuation_solver}, options,
+                                       measure);
     return optimize_with<Measure, Q>(mesh, ideal, solver, NoContinuation{}, options, measure);
   };
   switch (options.solver) {
-    case SolverKind::newton: return with_continuation(NewtonSolver{});
-    case SolverKind::matrix_free_newton: return with_continuation(MatrixFreeNewton{});
+    case SolverKind::newton: return with_continuation(NewtonSolver{.hessian = options.hessian});
+    case SolverKind::matrix_free_newton: return with_continuation(MatrixFreeNewton{.hessian = options.hessian});
     case SolverKind::gauss_seidel: return with_continuation(GaussSeidel{});
   }
   throw std::invalid_argument("hom::optimize: unknown solver kind");

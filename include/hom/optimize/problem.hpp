@@ -211,33 +211,29 @@ class OptimizationProblem {
   // --- evaluation ----------------------------------------------------------
   /// Validity and quality of every element at X (sigma_0, independent of delta).
   MeshState status(const Coordinates& X) const {
-    constexpr int D = dim;
-    using Mat = Eigen::Matrix<double, D, D>;
     const int ne = num_elements();
     MeshState s;
     s.valid.assign(ne, 1);
     s.quality.assign(ne, 0.0);
-    const Tabulation<Family>& tab = *tab_;
-    HOM_PARALLEL_FOR_DYNAMIC(threads_)
-    for (int e = 0; e < ne; ++e) {
-      Eigen::Matrix<double, D, Eigen::Dynamic> Xe;
-      element_coordinates(X, e, Xe);
-      const Eigen::Matrix<double, D, Eigen::Dynamic> JP = Xe * tab.shape_gradients;
-      const Ideal& id = ideals_[e];
-      double integral = 0.0, volume = 0.0;
-      bool valid = true;
-      for (int q = 0; q < tab.num_points(); ++q) {
-        const double eta = measure_.value(Mat(JP.template middleCols<D>(q * D) * id.inverse_jacobian[q]), ClampedDeterminant{});
-        if (!std::isfinite(eta)) {
-          valid = false;
-          break;
+    for_each_block(X, [&](int first, int count, const Eigen::MatrixXd& JP, Workspace&) {
+      for (int b = 0; b < count; ++b) {
+        const int e = first + b;
+        const Ideal& id = ideals_[e];
+        double integral = 0.0, volume = 0.0;
+        bool valid = true;
+        for (int q = 0; q < num_points(); ++q) {
+          const double eta = measure_.value(point_jacobian(JP, b, q, id), ClampedDeterminant{});
+          if (!std::isfinite(eta)) {
+            valid = false;
+            break;
+          }
+          integral += id.weight[q] * eta * eta;
+          volume += id.weight[q];
         }
-        integral += id.weight[q] * eta * eta;
-        volume += id.weight[q];
+        s.valid[e] = valid;
+        s.quality[e] = valid ? 1.0 / std::sqrt(integral / volume) : 0.0;  // eqs 3.20, 3.24
       }
-      s.valid[e] = valid;
-      s.quality[e] = valid ? 1.0 / std::sqrt(integral / volume) : 0.0;  // eqs 3.20, 3.24
-    }
+    });
     s.min_quality = ne > 0 ? 1.0 : 0.0;
     for (int e = 0; e < ne; ++e) {
       s.inverted += !s.valid[e];
@@ -248,34 +244,49 @@ class OptimizationProblem {
 
   /// f at X with the current deltas; +inf if an element with delta = 0 is invalid.
   double value(const Coordinates& X) const {
-    const int ne = num_elements();
-    std::vector<double> fe(ne);
-    const Tabulation<Family>& tab = *tab_;
-    HOM_PARALLEL_FOR_DYNAMIC(threads_)
-    for (int e = 0; e < ne; ++e) {
-      Eigen::Matrix<double, dim, Eigen::Dynamic> Xe;
-      element_coordinates(X, e, Xe);
-      fe[e] = with_regularization(e, [&](const auto& reg) { return element_objective<Family>(tab, Xe, ideals_[e], measure_, reg); });
-    }
+    std::vector<double> fe(num_elements());
+    for_each_block(X, [&](int first, int count, const Eigen::MatrixXd& JP, Workspace&) {
+      for (int b = 0; b < count; ++b) {
+        const int e = first + b;
+        const Ideal& id = ideals_[e];
+        fe[e] = with_regularization(e, [&](const auto& reg) {
+          double f = 0.0;
+          for (int q = 0; q < num_points(); ++q) {
+            const double eta = measure_.value(point_jacobian(JP, b, q, id), reg);
+            f += 0.5 * id.weight[q] * (eta - 1.0) * (eta - 1.0);
+          }
+          return f;
+        });
+      }
+    });
     return sum_in_order(fe);
   }
 
   /// f at X and its gradient over the free dofs (g is undefined when f = +inf).
   double value_gradient(const Coordinates& X, Eigen::VectorXd& g) const {
-    const int ne = num_elements();
     const int n = nodes_per_element();
-    std::vector<double> fe(ne);
-    Eigen::Matrix<double, dim, Eigen::Dynamic> Ge(dim, Eigen::Index(n) * ne);
-    const Tabulation<Family>& tab = *tab_;
-    HOM_PARALLEL_FOR_DYNAMIC(threads_)
-    for (int e = 0; e < ne; ++e) {
-      Eigen::Matrix<double, dim, Eigen::Dynamic> Xe;
-      ElementGradient<dim> grad;
-      element_coordinates(X, e, Xe);
-      fe[e] = with_regularization(
-          e, [&](const auto& reg) { return element_objective_gradient<Family>(tab, Xe, ideals_[e], measure_, reg, grad); });
-      Ge.middleCols(Eigen::Index(e) * n, n) = grad;
-    }
+    std::vector<double> fe(num_elements());
+    Eigen::Matrix<double, dim, Eigen::Dynamic> Ge(dim, Eigen::Index(n) * num_elements());
+    for_each_block(X, [&](int first, int count, const Eigen::MatrixXd& JP, Workspace& w) {
+      w.P.resize(JP.rows(), JP.cols());
+      for (int b = 0; b < count; ++b) {
+        const int e = first + b;
+        const Ideal& id = ideals_[e];
+        fe[e] = with_regularization(e, [&](const auto& reg) {
+          double f = 0.0;
+          for (int q = 0; q < num_points(); ++q) {
+            const NodeMatrix& A = id.inverse_jacobian[q];
+            NodeMatrix gq;
+            const double eta = measure_.value_gradient(point_jacobian(JP, b, q, id), reg, gq);
+            const double r = eta - 1.0;
+            f += 0.5 * id.weight[q] * r * r;
+            w.P.template block<dim, dim>(dim * b, dim * q).noalias() = (id.weight[q] * r) * gq * A.transpose();
+          }
+          return f;
+        });
+      }
+      pull_back(w, first, count, Ge);
+    });
     gather(Ge, g);
     return sum_in_order(fe);
   }
@@ -289,7 +300,7 @@ class OptimizationProblem {
     const int n = nodes_per_element();
     const Tabulation<Family>& tab = *tab_;
     Eigen::Matrix<double, 1, Eigen::Dynamic> Se(1, Eigen::Index(n) * ne);
-    HOM_PARALLEL_FOR(threads_)
+    HOM_PARALLEL_FOR(detail::useful_threads(threads_, ne, 64))
     for (int e = 0; e < ne; ++e) {
       const Ideal& id = ideals_[e];
       for (int l = 0; l < n; ++l) {
@@ -337,7 +348,7 @@ class OptimizationProblem {
     const Tabulation<Family>& tab = *tab_;
     for (const auto& group : pat.colors.groups) {
       const int size = int(group.size());
-      HOM_PARALLEL_FOR_DYNAMIC(threads_)
+      HOM_PARALLEL_FOR_DYNAMIC(detail::useful_threads(threads_, size, 16))
       for (int k = 0; k < size; ++k) {
         const int e = group[k];
         Eigen::Matrix<double, dim, Eigen::Dynamic> Xe;
@@ -368,8 +379,12 @@ class OptimizationProblem {
   }
 
   /// The Hessian at a configuration as an operator on free-dof vectors, from
-  /// per-quadrature-point data (ElementHessianData), never forming element
-  /// Hessians. Also holds the nodal Dim x Dim diagonal blocks (block Jacobi).
+  /// per-quadrature-point data (Dim^2 numbers per point for Gauss-Newton,
+  /// Dim^4 otherwise; see ElementHessianData), never forming element
+  /// Hessians. It also holds, per free node k, the mean of the diagonal of
+  /// the nodal block d^2 f / dx_k^2, trace / Dim: the scalar Jacobi
+  /// preconditioner of MatrixFreeNewton. (The full Dim x Dim blocks cost Dim^2
+  /// times more than a Hessian-vector product to form, the traces a fraction of one.)
   class HessianOperator {
    public:
     int size() const { return problem_ ? problem_->num_dofs() : 0; }
@@ -377,76 +392,113 @@ class OptimizationProblem {
     /// out = H v.
     void apply(const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
       const OptimizationProblem& P = *problem_;
-      const int ne = P.num_elements();
       const int n = P.nodes_per_element();
-      Eigen::Matrix<double, dim, Eigen::Dynamic> Oe(dim, Eigen::Index(n) * ne);
-      const Tabulation<Family>& tab = *P.tab_;
-      HOM_PARALLEL_FOR(P.threads_)
-      for (int e = 0; e < ne; ++e) {
-        Eigen::Matrix<double, dim, Eigen::Dynamic> Ve(dim, n), out_e;
-        bool any = false;
-        for (int i = 0; i < n; ++i) {
-          const int fi = P.free_index_[P.elements_(i, e)];
-          if (fi >= 0) {
-            Ve.col(i) = v.template segment<dim>(dim * fi);
-            any = true;
-          } else {
-            Ve.col(i).setZero();
-          }
-        }
-        if (any)
-          apply_element_hessian<Family>(tab, data_[e], Ve, out_e);
-        else
-          out_e.setZero(dim, n);
-        Oe.middleCols(Eigen::Index(e) * n, n) = out_e;
-      }
+      const int nq = P.num_points();
+      const int stride = point_stride();
+      Eigen::Matrix<double, dim, Eigen::Dynamic> Oe(dim, Eigen::Index(n) * P.num_elements());
+      P.for_each_block_of(
+          [&](int first, int count, Eigen::MatrixXd& Vb) {
+            Vb.resize(dim * count, n);
+            for (int i = 0; i < n; ++i)
+              for (int b = 0; b < count; ++b) {
+                const int fi = P.free_index_[P.elements_(i, first + b)];
+                if (fi >= 0)
+                  Vb.template block<dim, 1>(dim * b, i) = v.template segment<dim>(dim * fi);
+                else
+                  Vb.template block<dim, 1>(dim * b, i).setZero();
+              }
+          },
+          [&](int first, int count, const Eigen::MatrixXd& dJ, Workspace& w) {
+            w.P.resize(dJ.rows(), dJ.cols());
+            for (int b = 0; b < count; ++b) {
+              const double* data = data_.data() + (std::size_t(first + b) * nq) * stride;
+              for (int q = 0; q < nq; ++q, data += stride) {
+                Eigen::Matrix<double, D2, 1> s;
+                for (int c = 0; c < dim; ++c) s.template segment<dim>(dim * c) = dJ.template block<dim, 1>(dim * b, dim * q + c);
+                if (form_ == HessianForm::gauss_newton) {
+                  const Eigen::Map<const Eigen::Matrix<double, D2, 1>> u(data);
+                  s = u * u.dot(s);
+                } else {
+                  s = Eigen::Map<const Eigen::Matrix<double, D2, D2>>(data).lazyProduct(s).eval();  // no GEMV call for Dim^2 x Dim^2
+                }
+                for (int c = 0; c < dim; ++c) w.P.template block<dim, 1>(dim * b, dim * q + c) = s.template segment<dim>(dim * c);
+              }
+            }
+            P.pull_back(w, first, count, Oe);
+          });
       P.gather(Oe, out);
     }
-    /// d^2 f / dx_k^2 for each free node k (Dim x Dim).
-    const std::vector<NodeMatrix>& diagonal_blocks() const { return diagonal_; }
+    /// trace(d^2 f / dx_k^2) / Dim for each free node k.
+    const Eigen::VectorXd& diagonal_means() const { return diagonal_; }
 
    private:
     friend class OptimizationProblem;
+    static constexpr int D2 = dim * dim;
+    int point_stride() const { return form_ == HessianForm::gauss_newton ? D2 : D2 * D2; }
     const OptimizationProblem* problem_ = nullptr;
     HessianForm form_ = HessianForm::gauss_newton;
-    std::vector<ElementHessianData<dim>> data_;
-    std::vector<NodeMatrix> diagonal_;
+    std::vector<double> data_;  // per element, per point: u (Gauss-Newton) or M (column-major)
+    Eigen::VectorXd diagonal_;
   };
 
   /// f, gradient and the Hessian operator at X. Memory: per quadrature point
   /// Dim^2 numbers (Gauss-Newton) or Dim^4 (exact, projected).
   double hessian_operator(const Coordinates& X, HessianForm form, Eigen::VectorXd& g, HessianOperator& op) const {
+    constexpr int D2 = dim * dim;
     const int ne = num_elements();
     const int n = nodes_per_element();
+    const int nq = num_points();
     std::vector<double> fe(ne);
     Eigen::Matrix<double, dim, Eigen::Dynamic> Ge(dim, Eigen::Index(n) * ne);
-    Eigen::Matrix<double, dim, Eigen::Dynamic> Be(dim, Eigen::Index(dim) * n * ne);
+    Eigen::VectorXd Te(Eigen::Index(n) * ne);  // per element and local node: trace of its diagonal block
     op.problem_ = this;
     op.form_ = form;
-    op.data_.resize(ne);
-    const Tabulation<Family>& tab = *tab_;
-    if (diagonal_basis_.rows() == 0) diagonal_basis_ = diagonal_block_basis<Family>(tab);
+    const int stride = op.point_stride();
+    op.data_.resize(std::size_t(ne) * nq * stride);
+    if (diagonal_basis_.rows() == 0) diagonal_basis_ = diagonal_block_basis<Family>(*tab_);
     const Eigen::MatrixXd& W = diagonal_basis_;
-    HOM_PARALLEL_FOR_DYNAMIC(threads_)
-    for (int e = 0; e < ne; ++e) {
-      Eigen::Matrix<double, dim, Eigen::Dynamic> Xe, blocks;
-      ElementGradient<dim> grad;
-      element_coordinates(X, e, Xe);
-      fe[e] = with_regularization(e, [&](const auto& reg) {
-        return element_hessian_data<Family>(tab, Xe, ideals_[e], measure_, reg, form, grad, op.data_[e]);
-      });
-      Ge.middleCols(Eigen::Index(e) * n, n) = grad;
-      element_hessian_diagonal_blocks<Family>(tab, op.data_[e], W, blocks);
-      Be.middleCols(Eigen::Index(e) * n * dim, n * dim) = blocks;
-    }
+    for_each_block(X, [&](int first, int count, const Eigen::MatrixXd& JP, Workspace& w) {
+      w.P.resize(JP.rows(), JP.cols());
+      w.T.resize(D2 * nq, count);  // per element: sum_a M_q(a + D b, a + D d), the trace part of each point matrix
+      for (int b = 0; b < count; ++b) {
+        const int e = first + b;
+        const Ideal& id = ideals_[e];
+        double* data = op.data_.data() + (std::size_t(e) * nq) * stride;
+        fe[e] = with_regularization(e, [&](const auto& reg) {
+          double f = 0.0;
+          for (int q = 0; q < nq; ++q, data += stride) {
+            const NodeMatrix& A = id.inverse_jacobian[q];
+            const double c = id.weight[q];
+            const NodeMatrix J = point_jacobian(JP, b, q, id);
+            const auto pd = point_second_order(J, A, c, reg, form, data);
+            f += 0.5 * c * pd.residual * pd.residual;
+            w.P.template block<dim, dim>(dim * b, dim * q).noalias() = (c * pd.residual) * pd.gradient;
+            for (int d = 0; d < dim; ++d)
+              for (int bb = 0; bb < dim; ++bb) {
+                double t = 0.0;
+                if (form == HessianForm::gauss_newton)
+                  for (int a = 0; a < dim; ++a) t += data[a + dim * bb] * data[a + dim * d];
+                else
+                  for (int a = 0; a < dim; ++a) t += data[(a + dim * bb) + D2 * (a + dim * d)];
+                w.T(q * D2 + bb + dim * d, b) = t;
+              }
+          }
+          return f;
+        });
+      }
+      pull_back(w, first, count, Ge);
+      const Eigen::MatrixXd traces = W * w.T.leftCols(count);  // n x count
+      for (int b = 0; b < count; ++b) Te.segment(Eigen::Index(first + b) * n, n) = traces.col(b);
+    });
     gather(Ge, g);
-    // Nodal diagonal blocks, summed per node in element order.
     const int nf = num_free_nodes();
-    op.diagonal_.assign(nf, NodeMatrix::Zero());
-    HOM_PARALLEL_FOR(threads_)
-    for (int k = 0; k < nf; ++k)
-      for (const auto& inc : incidences(free_nodes_[k]))
-        op.diagonal_[k] += Be.template middleCols<dim>((Eigen::Index(inc.element) * n + inc.local) * dim);
+    op.diagonal_.setZero(nf);
+    HOM_PARALLEL_FOR(detail::useful_threads(threads_, nf, 4096))
+    for (int k = 0; k < nf; ++k) {
+      double t = 0.0;
+      for (const auto& inc : incidences(free_nodes_[k])) t += Te[Eigen::Index(inc.element) * n + inc.local];
+      op.diagonal_[k] = t / dim;
+    }
     return sum_in_order(fe);
   }
 
@@ -494,6 +546,77 @@ class OptimizationProblem {
     Coloring colors;  ///< elements, no two of a color sharing a node
   };
 
+  // --- blocked evaluation ----------------------------------------------------
+  // Elements are evaluated in blocks of block_size() consecutive elements:
+  // the block's coordinates are stacked into Xb ((Dim * count) x n, rows
+  // Dim b .. Dim b + Dim - 1 for its b-th element) and all their Jacobians at
+  // all quadrature points come from one matrix product with the shared
+  // tabulation, JP = Xb * G ((Dim * count) x (Dim * nq)); gradients go back
+  // the same way, out = P * G^T. A product per block instead of per element
+  // reads G (n x Dim nq: 9 MB for a degree-10 tetrahedron) once per block and
+  // runs at dense matrix-product speed. Blocks are fixed by element index and
+  // each is computed by one thread, so results do not depend on the number of threads.
+  struct Workspace {
+    Eigen::MatrixXd Xb, JP, P, T, out;
+  };
+
+  int num_points() const { return tab_->num_points(); }
+
+  int block_size() const { return std::clamp(16384 / std::max(1, nodes_per_element()), 16, 128); }
+
+  static NodeMatrix point_jacobian(const Eigen::MatrixXd& JP, int b, int q, const Ideal& id) {
+    return JP.template block<dim, dim>(dim * b, dim * q) * id.inverse_jacobian[q];
+  }
+
+  /// Calls fn(first, count, JP, workspace) for every block, JP = Xb * G with
+  /// Xb filled by rows(first, count, Xb).
+  template <class Rows, class Fn>
+  void for_each_block_of(Rows&& rows, Fn&& fn) const {
+    const detail::SerialEigenScope serial_eigen;
+    const int ne = num_elements();
+    const int B = block_size();
+    const int blocks = (ne + B - 1) / B;
+    const Eigen::MatrixXd& G = tab_->shape_gradients;
+    // About 2e5 multiply-adds of the products per thread at least.
+    const long long work = (long long)ne * num_points() * nodes_per_element();
+    HOM_PARALLEL_FOR_EACH(std::min(detail::useful_threads(threads_, work, 200000), blocks))
+    for (int k = 0; k < blocks; ++k) {
+      static thread_local Workspace w;
+      const int first = k * B;
+      const int count = std::min(B, ne - first);
+      rows(first, count, w.Xb);
+      w.JP.noalias() = w.Xb * G;
+      fn(first, count, w.JP, w);
+    }
+  }
+
+  template <class Fn>
+  void for_each_block(const Coordinates& X, Fn&& fn) const {
+    const int n = nodes_per_element();
+    for_each_block_of(
+        [&](int first, int count, Eigen::MatrixXd& Xb) {
+          Xb.resize(dim * count, n);
+          for (int i = 0; i < n; ++i)
+            for (int b = 0; b < count; ++b) Xb.template block<dim, 1>(dim * b, i) = X.col(elements_(i, first + b));
+        },
+        fn);
+  }
+
+  /// Ge's columns of the block's elements = w.P * G^T (element b's rows Dim b ..).
+  void pull_back(Workspace& w, int first, int count, Eigen::Matrix<double, dim, Eigen::Dynamic>& Ge) const {
+    const int n = nodes_per_element();
+    w.out.noalias() = w.P * tab_->shape_gradients.transpose();
+    for (int b = 0; b < count; ++b)
+      for (int i = 0; i < n; ++i) Ge.col(Eigen::Index(first + b) * n + i) = w.out.template block<dim, 1>(dim * b, i);
+  }
+
+  /// A point's residual eta - 1 and d eta / d J_P, its second-order data written to `data`.
+  template <class Reg>
+  PointSecondOrder<dim> point_second_order(const NodeMatrix& J, const NodeMatrix& A, double c, const Reg& reg,
+                                           HessianForm form, double* data) const {
+    return hom::point_second_order<dim>(measure_, reg, J, A, c, form, data);
+  }
+
   static double sum_in_order(const std::vector<double>& v) {
     double s = 0.0;
     for (double x : v) s += x;
@@ -506,7 +629,7 @@ class OptimizationProblem {
     const int n = nodes_per_element();
     const int nf = num_free_nodes();
     g.setZero(num_dofs());
-    HOM_PARALLEL_FOR(threads_)
+    HOM_PARALLEL_FOR(detail::useful_threads(threads_, nf, 4096))
     for (int k = 0; k < nf; ++k) {
       Eigen::Matrix<double, dim, 1> s = Eigen::Matrix<double, dim, 1>::Zero();
       for (const auto& inc : incidences(free_nodes_[k])) s += Ge.col(Eigen::Index(inc.element) * n + inc.local);

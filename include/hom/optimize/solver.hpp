@@ -35,9 +35,15 @@
 ///   3. quality stagnation: every element valid during the last
 ///      `stagnation_window` iterations and the minimum element quality grew
 ///      by at most `quality_tolerance` over them;
-///   4. the iteration limit (not converged);
-///   5. the step failed: the line search found no acceptable step (not converged).
-/// `converged` is true for 1-3 (the mesh is then valid).
+///   4. valid long enough (off unless iterations_after_valid >= 0): every element
+///      valid for the last iterations_after_valid iterations; the early exit of
+///      a p-continuation stage, whose job is a valid start for the next stage;
+///   5. target reached (off unless target_quality > 0): every element valid and
+///      the minimum quality >= target_quality, for users who need a good
+///      enough mesh rather than the optimum;
+///   6. the iteration limit (not converged);
+///   7. the step failed: the line search found no acceptable step (not converged).
+/// `converged` is true for 1-5 (the mesh is then valid).
 
 #include <algorithm>
 #include <chrono>
@@ -62,6 +68,8 @@ enum class StopReason {
   gradient,            ///< relative gradient norm below tolerance
   objective_change,    ///< relative objective decrease below tolerance
   quality_stagnation,  ///< all valid and the minimum quality stopped improving
+  valid,               ///< all valid for SolverOptions::iterations_after_valid iterations
+  target_quality,      ///< all valid and min quality >= SolverOptions::target_quality
   max_iterations,      ///< iteration limit reached
   line_search_failed,  ///< no acceptable step (no decrease, or every trial invalid)
 };
@@ -71,6 +79,8 @@ inline std::string_view to_string(StopReason r) {
     case StopReason::gradient: return "gradient";
     case StopReason::objective_change: return "objective change";
     case StopReason::quality_stagnation: return "quality stagnation";
+    case StopReason::valid: return "valid";
+    case StopReason::target_quality: return "target quality";
     case StopReason::max_iterations: return "max iterations";
     case StopReason::line_search_failed: return "line search failed";
   }
@@ -80,6 +90,7 @@ inline std::string_view to_string(StopReason r) {
 /// Progress of one outer iteration, after its step.
 struct IterationInfo {
   std::string_view solver;
+  std::string_view stage;      ///< SolverOptions::stage (p-continuation: "linear" or "high-order")
   int iteration = 0;           ///< 1-based
   double objective = 0.0;      ///< f after the step (deltas of this iteration)
   double gradient_norm = 0.0;  ///< scaled gradient (criterion 1) before the step
@@ -102,9 +113,12 @@ inline void print_iteration(const IterationInfo& it, std::ostream& out = std::cl
 struct SolverOptions {
   int max_iterations = 200;
   double gradient_tolerance = 1e-8;   ///< criterion 1
-  double objective_tolerance = 1e-10; ///< criterion 2
-  double quality_tolerance = 1e-6;    ///< criterion 3
-  int stagnation_window = 5;          ///< criterion 3
+  double objective_tolerance = 1e-6; ///< criterion 2
+  double quality_tolerance = 1e-3;    ///< criterion 3
+  int stagnation_window = 3;          ///< criterion 3
+  int iterations_after_valid = -1;    ///< criterion 4 (< 0: off)
+  double target_quality = 0.0;        ///< criterion 5 (<= 0: off)
+  std::string_view stage;             ///< label copied into IterationInfo (which stage of a pipeline)
   bool verbose = false;               ///< print_iteration to std::clog
   std::function<void(const IterationInfo&)> on_iteration;  ///< called after every iteration
 };
@@ -193,6 +207,7 @@ SolverResult run_outer_loop(Problem& problem, const SolverOptions& opt, std::str
   res.initial_inverted = state.inverted;
   res.initial_min_quality = state.min_quality;
   std::deque<double> recent_quality;  // min quality over the trailing all-valid iterations
+  int valid_iterations = 0;           // trailing iterations ending with every element valid
   Eigen::VectorXd g;
   bool stopped = false;
   for (int k = 0; !stopped; ++k) {
@@ -223,6 +238,7 @@ SolverResult run_outer_loop(Problem& problem, const SolverOptions& opt, std::str
 
     IterationInfo info;
     info.solver = name;
+    info.stage = opt.stage;
     info.iteration = k + 1;
     info.objective = out.objective;
     info.gradient_norm = gnorm;
@@ -240,6 +256,17 @@ SolverResult run_outer_loop(Problem& problem, const SolverOptions& opt, std::str
       stopped = true;
     }
     if (state.all_valid()) {
+      ++valid_iterations;
+      if (!stopped && opt.iterations_after_valid >= 0 && valid_iterations > opt.iterations_after_valid) {
+        res.reason = StopReason::valid;
+        res.converged = true;
+        stopped = true;
+      }
+      if (!stopped && opt.target_quality > 0.0 && state.min_quality >= opt.target_quality) {
+        res.reason = StopReason::target_quality;
+        res.converged = true;
+        stopped = true;
+      }
       recent_quality.push_back(state.min_quality);
       if (int(recent_quality.size()) > opt.stagnation_window + 1) recent_quality.pop_front();
       if (!stopped && opt.stagnation_window > 0 && int(recent_quality.size()) == opt.stagnation_window + 1 &&
@@ -250,6 +277,7 @@ SolverResult run_outer_loop(Problem& problem, const SolverOptions& opt, std::str
       }
     } else {
       recent_quality.clear();
+      valid_iterations = 0;
     }
   }
   problem.update_regularization(state);

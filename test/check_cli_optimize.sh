@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# `hom optimize` end to end: generated curved meshes with randomly moved
+# interior nodes (some elements inverted) are untangled (exit 0, `hom quality`
+# of the output finds no inverted element, the boundary nodes did not move, the
+# JSON report says 0 inverted, the output keeps the input's MSH version); bad
+# input, bad options and surface meshes fail with the documented exit status
+# and leave no output behind.
+#   $1 = hom, $2 = make_tangled_mesh (test/make_tangled_mesh.cpp)
+set -uo pipefail
+hom=$1
+gen=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+py=/usr/bin/python3
+[[ -x $py ]] || py=python3
+
+# json_field FILE STAGE KEY: the KEY of the case whose stage is STAGE.
+json_field() {
+  "$py" -c 'import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["tool"] == "hom optimize", r["tool"]
+c = [c for c in r["cases"] if c["stage"] == sys.argv[2]]
+assert len(c) == 1, sys.argv[2]
+print(c[0][sys.argv[3]])' "$@"
+}
+
+# optimize_case NAME FAMILY P N MSH_VERSION [hom optimize options...]
+optimize_case() {
+  local name=$1 family=$2 p=$3 n=$4 version=$5
+  shift 5
+  local in="$work/$name.msh" out="$work/$name.opt.msh" json="$work/$name.json"
+  "$gen" make "$family" "$p" "$n" "$in" "$version" || fail "$name: generator (no inverted element?)"
+  "$hom" quality "$in" >/dev/null; [[ $? -eq 3 ]] || fail "$name: hom quality does not see the input as tangled"
+  local log rc
+  log=$("$hom" optimize "$in" -o "$out" --json "$json" "$@" 2>&1); rc=$?
+  echo "$log" | sed "s/^/  [$name] /"
+  [[ $rc -eq 0 ]] || fail "$name: hom optimize exit $rc"
+  [[ -s "$out" ]] || fail "$name: no output mesh"
+  [[ ! -e "$out.tmp" && ! -e "$json.tmp" ]] || fail "$name: temporary file left behind"
+  grep -q "^initial" <<<"$log" && grep -q "^optimized" <<<"$log" || fail "$name: no before/after table"
+  grep -q "iterations, stopped on" <<<"$log" || fail "$name: no solver summary"
+  # The output is valid for `hom quality` too (an independent read of the file).
+  "$hom" quality "$out" >/dev/null; rc=$?
+  [[ $rc -eq 0 ]] || fail "$name: hom quality of the output exits $rc"
+  # Same MSH version as the input.
+  [[ $(sed -n 2p "$out" | cut -d' ' -f1) == "$version" ]] || fail "$name: output is not MSH $version"
+  # Boundary (non-free) nodes unchanged, free nodes moved.
+  "$gen" fixed-match "$in" "$out" || fail "$name: boundary nodes moved or nothing moved"
+  # The JSON report.
+  [[ $(json_field "$json" initial inverted) -gt 0 ]] || fail "$name: json: initial case has no inverted element"
+  [[ $(json_field "$json" optimized inverted) -eq 0 ]] || fail "$name: json: optimized case has inverted elements"
+  [[ $(json_field "$json" optimized iterations) -gt 0 ]] || fail "$name: json: no iterations"
+  json_field "$json" optimized stop_reason >/dev/null || fail "$name: json: no stop_reason"
+  json_field "$json" optimized time_s >/dev/null || fail "$name: json: no time_s"
+}
+
+optimize_case tri3 tri 3 4 4.1 --vtu "$work/tri3.vtu"
+grep -q 'Name="pointwise_quality"' "$work/tri3.vtu" || fail "tri3: vtu has no pointwise_quality array"
+[[ $(json_field "$work/tri3.json" optimized solver) == newton ]] || fail "tri3: auto should pick newton"
+# One thread from here on: these meshes are small, and OpenMP's default team
+# spinning on a loaded machine costs seconds per solve.
+optimize_case quad3 quad 3 4 2.2 --solver gauss-seidel --pcont --threads 1
+optimize_case tet2 tet 2 2 4.1 --solver matrix-free --measure oddy --threads 1
+optimize_case hex2 hex 2 2 2.2 --solver newton --quadrature thesis --ideal equilateral --threads 1
+
+# Tangled vertices: the straight-sided ideal of those elements is inverted, so
+# the default run warns and exits 3 (outputs written); the equilateral ideal
+# untangles the mesh.
+"$gen" make tri 1 3 "$work/lin.msh" 4.1 2.0 1 >/dev/null || fail "lin: generator"
+err=$("$hom" optimize "$work/lin.msh" -o "$work/lin.opt.msh" --threads 1 2>&1 >/dev/null); rc=$?
+[[ $rc -eq 3 ]] || fail "tangled vertices, straight-sided ideal: exit $rc, expected 3"
+grep -q "straight-sided ideal is inverted" <<<"$err" || fail "tangled vertices: no warning: $err"
+[[ -s "$work/lin.opt.msh" ]] || fail "tangled vertices: exit 3 but no output written"
+"$hom" optimize "$work/lin.msh" -o "$work/lin.opt.msh" --threads 1 --ideal equilateral >/dev/null 2>&1; rc=$?
+[[ $rc -eq 0 ]] || fail "tangled vertices, equilateral ideal: exit $rc, expected 0"
+"$hom" quality "$work/lin.opt.msh" --ideal equilateral >/dev/null || fail "tangled vertices: output not valid"
+
+# Bad input: a truncated file -> exit 1, FILE:LINE message, no output file.
+head -n 20 "$work/tri3.msh" > "$work/truncated.msh"
+err=$("$hom" optimize "$work/truncated.msh" -o "$work/x.msh" --json "$work/x.json" 2>&1 >/dev/null); rc=$?
+[[ $rc -eq 1 ]] || fail "truncated: exit $rc, expected 1"
+grep -q "truncated.msh:[0-9]" <<<"$err" || fail "truncated: message has no FILE:LINE: $err"
+for f in x.msh x.msh.tmp x.json x.json.tmp; do [[ ! -e "$work/$f" ]] || fail "truncated: $f left behind"; done
+"$hom" optimize "$work/missing.msh" -o "$work/x.msh" >/dev/null 2>&1; [[ $? -eq 1 ]] || fail "missing file: expected exit 1"
+
+# Bad options -> exit 2, nothing written.
+"$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --solver nope >/dev/null 2>&1; rc=$?
+[[ $rc -eq 2 ]] || fail "unknown --solver: exit $rc, expected 2"
+"$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --measure nope >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --measure"
+"$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --ideal nope >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --ideal"
+"$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --max-iterations 0 >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --max-iterations"
+"$hom" optimize "$work/tri3.msh" >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "no -o"
+"$hom" optimize >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "no input"
+[[ ! -e "$work/x.msh" ]] || fail "bad options: output written"
+
+# A surface mesh (triangles off z = 0) is refused with exit 2.
+cat > "$work/surface.msh" <<'MSH'
+$MeshFormat
+4.1 0 8
+$EndMeshFormat
+$Nodes
+1 4 1 4
+2 1 0 4
+1
+2
+3
+4
+0 0 0
+1 0 0
+0 1 0
+1 1 1
+$EndNodes
+$Elements
+1 2 1 2
+2 1 2 2
+1 1 2 3
+2 2 4 3
+$EndElements
+MSH
+err=$("$hom" optimize "$work/surface.msh" -o "$work/s.msh" 2>&1 >/dev/null); rc=$?
+[[ $rc -eq 2 ]] || fail "surface mesh: exit $rc, expected 2"
+grep -q "surface mesh" <<<"$err" || fail "surface mesh: unclear message: $err"
+[[ ! -e "$work/s.msh" ]] || fail "surface mesh: output written"
+echo "cli optimize: ok"
