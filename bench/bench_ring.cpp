@@ -76,6 +76,7 @@
 #include <omp.h>
 #endif
 
+#include "harness.hpp"
 #include "ring_mesh.hpp"
 #include "hom/element/sub_elements.hpp"
 #include "hom/io/report.hpp"
@@ -173,12 +174,7 @@ constexpr double quad_min_quality_bound = 0.5;
 // ---------------------------------------------------------------------------
 // Helpers.
 
-std::string fmt(double v, int prec = 2) {
-  if (!std::isfinite(v)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*f", prec, v);
-  return b;
-}
+using hom::bench::fmt;
 
 std::string shell_quote(const std::string& s) {
   std::string out = "'";

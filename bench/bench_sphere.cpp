@@ -49,7 +49,6 @@
 /// OUT/sphere.json) with "thesis" entries. Exit: 0 all good, 1 a check
 /// failed, 2 bad options or errors.
 
-#include <sys/resource.h>
 
 #include <chrono>
 #include <cmath>
@@ -152,13 +151,7 @@ Json row_json(const Row& r, int elements, std::optional<int> nodes) {
 /// h / p, so higher degrees tangle with smaller amplitudes. Between these
 /// degrees a is interpolated geometrically; outside, the nearest value is used.
 double default_sphere_perturbation(int p) {
-  static const std::map<int, double> table = {{2, 0.462}, {4, 0.063}, {6, 0.0245}};
-  auto hi = table.lower_bound(p);
-  if (hi == table.end()) return std::prev(hi)->second;
-  if (hi->first == p || hi == table.begin()) return hi->second;
-  auto lo = std::prev(hi);
-  const double t = double(p - lo->first) / double(hi->first - lo->first);
-  return std::exp((1 - t) * std::log(lo->second) + t * std::log(hi->second));
+  return hom::bench::interpolate_geometric({{2, 0.462}, {4, 0.063}, {6, 0.0245}}, p);
 }
 
 /// Table D.4: 0.2 already inverts all 68 elements (0.15: 67); 0.35 leaves a margin.
@@ -166,22 +159,9 @@ constexpr double default_hex_perturbation = 0.35;
 
 // ---------------------------------------------------------------------------
 
-double peak_rss_mb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::string fmt(double v, int prec = 2) {
-  if (!std::isfinite(v)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*f", prec, v);
-  return b;
-}
+using hom::bench::fmt;
+using hom::bench::peak_rss_mb;
+using hom::bench::seconds_since;
 
 struct Options {
   std::vector<int> degrees;

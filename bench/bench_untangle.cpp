@@ -29,7 +29,6 @@
 /// Exit status: 0 when every optimized mesh is valid, 1 if one keeps inverted
 /// elements, 2 on bad options or errors.
 
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -54,6 +53,7 @@
 #endif
 
 #include "cube_with_cavity.hpp"
+#include "harness.hpp"
 #include "hom/geometry/curve_boundary.hpp"
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
@@ -136,69 +136,13 @@ Json row_json(const Row& r, int elements, int nodes) {
 /// amplitudes tangle the higher degrees. Between calibrated degrees a is
 /// interpolated geometrically; outside, the nearest value is used.
 double default_perturbation(int p) {
-  static const std::map<int, double> table = {{2, 0.355}, {5, 0.0685}, {10, 0.0102}};
-  auto hi = table.lower_bound(p);
-  if (hi == table.end()) return std::prev(hi)->second;
-  if (hi->first == p || hi == table.begin()) return hi->second;
-  auto lo = std::prev(hi);
-  const double t = double(p - lo->first) / double(hi->first - lo->first);
-  return std::exp((1 - t) * std::log(lo->second) + t * std::log(hi->second));
+  return hom::bench::interpolate_geometric({{2, 0.355}, {5, 0.0685}, {10, 0.0102}}, p);
 }
 
-// ---------------------------------------------------------------------------
-
-double peak_rss_mb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-/// Deterministic across platforms: mt19937_64 is fully specified, and the
-/// double is built from its top 53 bits (std::uniform_real_distribution is not
-/// specified bit for bit).
-class Random {
- public:
-  explicit Random(std::uint64_t seed) : g_(seed) {}
-  double uniform() { return double(g_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  Eigen::Vector3d in_unit_ball() {
-    for (;;) {
-      const Eigen::Vector3d v(2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1);
-      if (v.squaredNorm() <= 1.0) return v;
-    }
-  }
-
- private:
-  std::mt19937_64 g_;
-};
-
-/// Step 4: every free node moves by a random vector of the ball of radius
-/// amplitude * h_i (h_i: shortest ideal edge of the elements containing i).
-/// Returns the number of nodes moved.
-int perturb_free_nodes(TetMesh& mesh, double amplitude, std::uint64_t seed) {
-  const int n = mesh.num_nodes();
-  std::vector<double> h(n, std::numeric_limits<double>::infinity());
-  for (int e = 0; e < mesh.num_elements(); ++e) {
-    const auto v = mesh.ideal_vertices(e);
-    double shortest = std::numeric_limits<double>::infinity();
-    for (const auto& edge : Tet::edges()) shortest = std::min(shortest, (v.col(edge[0]) - v.col(edge[1])).norm());
-    for (int i = 0; i < mesh.nodes_per_element(); ++i) {
-      double& hi = h[mesh.elements()(i, e)];
-      hi = std::min(hi, shortest);
-    }
-  }
-  Random rng(seed);
-  int moved = 0;
-  for (int i = 0; i < n; ++i) {
-    if (mesh.node_class(i).kind != hom::NodeKind::free) continue;
-    mesh.node(i) += amplitude * h[i] * rng.in_unit_ball();
-    ++moved;
-  }
-  return moved;
-}
+using hom::bench::fmt;
+using hom::bench::peak_rss_mb;
+using hom::bench::perturb_free_nodes;
+using hom::bench::seconds_since;
 
 struct Stage {
   std::string name;
@@ -247,12 +191,6 @@ void write_vtu(const fs::path& path, const TetMesh& mesh, const hom::MeshQuality
                      {{"quality", 1, mq.qualities()}, {"scaled_jacobian", 1, mq.scaled_jacobians()}});
 }
 
-std::string fmt(double v, int prec = 2) {
-  if (!std::isfinite(v)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*f", prec, v);
-  return b;
-}
 
 void print_row(const std::string& label, const hom::Statistics& s, const Row* thesis) {
   std::printf("  %-10s %6s %6s %6s %9s %6d", label.c_str(), fmt(s.min).c_str(), fmt(s.max).c_str(),

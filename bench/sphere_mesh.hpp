@@ -65,7 +65,7 @@
 ///    (r_i + (r_o - r_i) t) d with t = (rho - rho_i) / (rho_o - rho_i). On the
 ///    boundary (t = 0, 1) this is the radial projection curve_boundary makes.
 ///
-/// 4. `perturb_free_nodes`: the "tangling" of both examples: every free
+/// 4. `perturb_free_nodes` (harness.hpp): the "tangling" of both examples: every free
 ///    (interior) node moves by a random vector, uniform in the ball of radius
 ///    a * h_i, h_i the shortest straight-sided edge of the elements that
 ///    contain node i (seeded mt19937_64, bit-reproducible across platforms).
@@ -84,6 +84,8 @@
 #include <vector>
 
 #include <Eigen/Dense>
+
+#include "harness.hpp"
 
 #include "hom/element/cube.hpp"
 #include "hom/element/simplex.hpp"
@@ -395,50 +397,6 @@ inline TetMesh curved_hollow_sphere(const MeshWithGeometry<TetMesh>& linear, int
     mesh.node(i) = (ri + (ro - ri) * t) * d;
   }
   return mesh;
-}
-
-/// Deterministic across platforms: mt19937_64 is fully specified and the
-/// double is built from its top 53 bits (std::uniform_real_distribution is
-/// not specified bit for bit).
-class Random {
- public:
-  explicit Random(std::uint64_t seed) : engine_(seed) {}
-  double uniform() { return double(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  Eigen::Vector3d in_unit_ball() {
-    for (;;) {
-      const Eigen::Vector3d v(2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1);
-      if (v.squaredNorm() <= 1.0) return v;
-    }
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
-
-/// Moves every free node by a random vector of the ball of radius
-/// amplitude * h_i (file comment, item 4). Returns the number of nodes moved.
-template <class MeshT>
-int perturb_free_nodes(MeshT& mesh, double amplitude, std::uint64_t seed) {
-  using Family = typename MeshT::family;
-  const int n = mesh.num_nodes();
-  std::vector<double> h(n, std::numeric_limits<double>::infinity());
-  for (int e = 0; e < mesh.num_elements(); ++e) {
-    const auto v = mesh.ideal_vertices(e);
-    double shortest = std::numeric_limits<double>::infinity();
-    for (const auto& edge : Family::edges()) shortest = std::min(shortest, (v.col(edge[0]) - v.col(edge[1])).norm());
-    for (int i = 0; i < mesh.nodes_per_element(); ++i) {
-      double& hi = h[mesh.elements()(i, e)];
-      hi = std::min(hi, shortest);
-    }
-  }
-  Random rng(seed);
-  int moved = 0;
-  for (int i = 0; i < n; ++i) {
-    if (mesh.node_class(i).kind != NodeKind::free) continue;
-    mesh.node(i) += amplitude * h[i] * rng.in_unit_ball();
-    ++moved;
-  }
-  return moved;
 }
 
 }  // namespace hom::bench
