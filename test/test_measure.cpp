@@ -425,6 +425,44 @@ TEST_CASE_TEMPLATE("gradient and Hessian agree with central finite differences",
   }
 }
 
+TEST_CASE_TEMPLATE("directional Hessian: the full Hessian contracted with rank-one directions e_a w^T", T,
+                   HOM_MEASURE_CASES) {
+  constexpr int Dim = T::dim;
+  const typename T::Measure measure;
+  Rng rng(90 + Dim);
+  std::normal_distribution<double> normal;
+  for (const double delta : {0.0, 0.05, 1.0}) {
+    for (int t = 0; t < 100; ++t) {
+      const Mat<Dim> J = random_jacobian<Dim>(rng, delta > 0.0 && t % 2 ? -1.0 : +1.0);
+      Eigen::Matrix<double, Dim, 1> w;
+      for (int k = 0; k < Dim; ++k) w[k] = normal(rng);
+      Mat<Dim> grad, grad_full, hw;
+      Hess<Dim> hess;
+      double eta, eta_full;
+      if (delta > 0.0) {
+        const RegularizedDeterminant reg{delta};
+        eta = value_gradient_directional_hessian(measure, J, reg, w, grad, hw);
+        eta_full = measure.value_gradient_hessian(J, reg, grad_full, hess);
+      } else {
+        eta = value_gradient_directional_hessian(measure, J, ClampedDeterminant{}, w, grad, hw);
+        eta_full = measure.value_gradient_hessian(J, ClampedDeterminant{}, grad_full, hess);
+      }
+      CHECK(eta == doctest::Approx(eta_full).epsilon(1e-13));
+      CHECK((grad - grad_full).cwiseAbs().maxCoeff() <= 1e-13 * grad_full.cwiseAbs().maxCoeff());
+      // Independent reference: d^2 eta / du_a du_b of J + u w^T is sum_{k,m} hess(a + D k, b + D m) w_k w_m.
+      Mat<Dim> expected;
+      for (int a = 0; a < Dim; ++a)
+        for (int b = 0; b < Dim; ++b) {
+          double sum = 0.0;
+          for (int k = 0; k < Dim; ++k)
+            for (int m = 0; m < Dim; ++m) sum += hess(a + Dim * k, b + Dim * m) * w[k] * w[m];
+          expected(a, b) = sum;
+        }
+      CHECK((hw - expected).cwiseAbs().maxCoeff() <= 1e-11 * std::max(1.0, expected.cwiseAbs().maxCoeff()));
+    }
+  }
+}
+
 // ---------------------------------------------------------------- figure 4.5
 
 namespace {

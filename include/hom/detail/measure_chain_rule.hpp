@@ -74,6 +74,24 @@ void compose_hessian(double phi, const SquareMatrix<Dim>& grad_phi, const Invers
   add_determinant_hessian<Dim>(J, phi * g.first, hess);
 }
 
+/// The Hessian contracted with a rank-one direction: J(u) = J + u w^T, u in R^Dim,
+/// which is how J_q moves when one node moves (d J / dx_a = e_a w^T with
+/// w = A^T grad N, see GaussSeidel, eq B.4). On entry hw holds the contraction of
+/// hess(phi); on exit d^2(phi g)/du^2 at u = 0, a Dim x Dim matrix. With
+/// p = grad(phi) w and c = cof(J) w (det(J + u w^T) = det J + c . u, the matrix
+/// determinant lemma, so the H_det term vanishes along these directions):
+///   hw = g hess_w(phi) + g' (p c^T + c p^T) + phi g'' c c^T.
+template <int Dim>
+void compose_directional_hessian(double phi, const SquareMatrix<Dim>& grad_phi, const InversePowerJet& g,
+                                 const SquareMatrix<Dim>& cof, const Eigen::Matrix<double, Dim, 1>& w,
+                                 SquareMatrix<Dim>& hw) {
+  const Eigen::Matrix<double, Dim, 1> p = grad_phi * w;
+  const Eigen::Matrix<double, Dim, 1> c = cof * w;
+  hw *= g.value;
+  hw.noalias() += g.first * (p * c.transpose() + c * p.transpose());
+  hw.noalias() += (phi * g.second) * (c * c.transpose());
+}
+
 /// Where reg(sigma) = 0 the measure is +infinity and has no derivatives: they are
 /// set to NaN so that a caller who uses them anyway notices.
 template <int Dim>

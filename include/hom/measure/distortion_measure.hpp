@@ -37,6 +37,11 @@
 ///   - with RegularizedDeterminant (delta > 0) eta_delta is finite and smooth for every J
 ///     and keeps the rotation invariances (not the scaling one: delta is fixed).
 ///
+/// Optional member, used when present (see value_gradient_directional_hessian below):
+///   - `m.value_gradient_directional_hessian(J, reg, w, grad, hw) -> double`: the Hessian
+///     contracted with the rank-one directions e_a w^T, hw(a, b) = sum_{k,m} hess(a + Dim k,
+///     b + Dim m) w_k w_m, the only part a one-node Newton step needs.
+///
 /// Models: ShapeMeasure (shape_measure.hpp, eq 3.2), OddyMeasure (oddy_measure.hpp, eq 3.3).
 ///
 /// Surfaces (chapter 5) reuse the Dim = 2 measures on the 2x2 matrix J-bar of eq 5.5
@@ -67,5 +72,31 @@ concept DistortionMeasure =
     requires { { M::name } -> std::convertible_to<std::string_view>; } &&
     DistortionMeasureFor<M, 2, RegularizedDeterminant> && DistortionMeasureFor<M, 3, RegularizedDeterminant> &&
     DistortionMeasureFor<M, 2, ClampedDeterminant> && DistortionMeasureFor<M, 3, ClampedDeterminant>;
+
+/// eta, d eta / dJ and the Hessian along the rank-one directions J + u w^T:
+/// hw(a, b) = d^2 eta(J + u w^T) / du_a du_b at u = 0. Moving one node of an
+/// element by u moves each point Jacobian that way (eq B.4), so non-linear
+/// Gauss-Seidel needs only this Dim x Dim matrix. The measure's own member
+/// is used when it has one; otherwise the full Hessian is contracted.
+template <class M, int Dim, class Reg>
+double value_gradient_directional_hessian(const M& m, const Eigen::Matrix<double, Dim, Dim>& J, const Reg& reg,
+                                          const Eigen::Matrix<double, Dim, 1>& w,
+                                          Eigen::Matrix<double, Dim, Dim>& grad,
+                                          Eigen::Matrix<double, Dim, Dim>& hw) {
+  if constexpr (requires { m.value_gradient_directional_hessian(J, reg, w, grad, hw); }) {
+    return m.value_gradient_directional_hessian(J, reg, w, grad, hw);
+  } else {
+    Eigen::Matrix<double, Dim * Dim, Dim * Dim> hess;
+    const double eta = m.value_gradient_hessian(J, reg, grad, hess);
+    for (int a = 0; a < Dim; ++a)
+      for (int b = 0; b < Dim; ++b) {
+        double sum = 0.0;
+        for (int k = 0; k < Dim; ++k)
+          for (int l = 0; l < Dim; ++l) sum += hess(a + Dim * k, b + Dim * l) * w[k] * w[l];
+        hw(a, b) = sum;
+      }
+    return eta;
+  }
+}
 
 }  // namespace hom

@@ -67,6 +67,31 @@ struct ShapeMeasure {
     detail::compose_hessian<Dim>(phi, grad_phi, g, J, cof, hess);
     return phi * g.value;
   }
+
+  /// Value, gradient and the Hessian contracted with a rank-one direction,
+  /// hw(a, b) = sum_{k,m} d^2 eta / dJ_ak dJ_bm w_k w_m: what a one-node
+  /// Newton step needs (Gauss-Seidel, eq B.4) at a fraction of the full
+  /// Dim^2 x Dim^2 Hessian's cost. hess(phi) = (2/d) I contracts to (2/d)|w|^2 I.
+  template <int Dim, DeterminantRegularization Reg>
+  double value_gradient_directional_hessian(const Eigen::Matrix<double, Dim, Dim>& J, const Reg& reg,
+                                            const Eigen::Matrix<double, Dim, 1>& w,
+                                            Eigen::Matrix<double, Dim, Dim>& grad,
+                                            Eigen::Matrix<double, Dim, Dim>& hw) const {
+    static_assert(Dim == 2 || Dim == 3, "hom::ShapeMeasure: J must be 2x2 or 3x3");
+    const Eigen::Matrix<double, Dim, Dim> cof = detail::cofactor<Dim>(J);
+    const DeterminantJet s = reg.jet(detail::determinant_from_cofactor<Dim>(J, cof));
+    if (s.value <= 0.0) {
+      hw.setConstant(std::numeric_limits<double>::quiet_NaN());
+      return detail::undefined_gradient<Dim>(grad);
+    }
+    const detail::InversePowerJet g = detail::inverse_power_jet<Dim, 2>(s);
+    const double phi = J.squaredNorm() / Dim;
+    const Eigen::Matrix<double, Dim, Dim> grad_phi = (2.0 / Dim) * J;
+    detail::compose_gradient<Dim>(phi, grad_phi, g, cof, grad);
+    hw = Eigen::Matrix<double, Dim, Dim>::Identity() * ((2.0 / Dim) * w.squaredNorm());
+    detail::compose_directional_hessian<Dim>(phi, grad_phi, g, cof, w, hw);
+    return phi * g.value;
+  }
 };
 
 static_assert(DistortionMeasure<ShapeMeasure>);

@@ -65,7 +65,6 @@ struct GaussSeidel {
     static constexpr int D = Problem::dim;
     using Mat = Eigen::Matrix<double, D, D>;
     using Vec = Eigen::Matrix<double, D, 1>;
-    using Mat2 = Eigen::Matrix<double, D * D, D * D>;
     const GaussSeidel& s;
     Coloring colors;
     std::vector<Eigen::Matrix<double, D, Eigen::Dynamic>> jacobians;  // per element: J_P,q = X G_q, Dim x (Dim nq)
@@ -111,7 +110,9 @@ struct GaussSeidel {
     // f^, grad_i f^ and grad^2_ii f^ at the current position (eqs B.2-B.4):
     // with w = A_q^T G_q(l,:)^T, d J / dx_a = e_a w^T, so
     //   grad  = sum_q c_q r_q g_q w,
-    //   H(a,b) = sum_q c_q [ (g_q w)_a (g_q w)_b + r_q sum_{k,m} h_q(a + D k, b + D m) w_k w_m ].
+    //   H(a,b) = sum_q c_q [ (g_q w)_a (g_q w)_b + r_q sum_{k,m} h_q(a + D k, b + D m) w_k w_m ],
+    // the last sum being the measure's Hessian along the rank-one directions
+    // (value_gradient_directional_hessian: Dim x Dim, never the full Dim^2 x Dim^2).
     double local_derivatives(const Problem& problem, int node, Vec& grad, Mat& hess) const {
       const auto& tab = problem.tabulation();
       double f = 0.0;
@@ -127,21 +128,12 @@ struct GaussSeidel {
             const Vec b = tab.shape_gradients.row(inc.local).template segment<D>(q * D).transpose();
             const Vec w = A.transpose() * b;
             const Mat J = JP.template middleCols<D>(q * D) * A;
-            Mat g;
-            Mat2 h;
-            const double eta = problem.measure().value_gradient_hessian(J, reg, g, h);
+            Mat g, hw;
+            const double eta = value_gradient_directional_hessian(problem.measure(), J, reg, w, g, hw);
             const double r = eta - 1.0;
             const Vec u = g * w;
             f += 0.5 * c * r * r;
             grad += (c * r) * u;
-            Mat hw;
-            for (int a = 0; a < D; ++a)
-              for (int bb = 0; bb < D; ++bb) {
-                double sum = 0.0;
-                for (int k = 0; k < D; ++k)
-                  for (int m = 0; m < D; ++m) sum += h(a + D * k, bb + D * m) * w[k] * w[m];
-                hw(a, bb) = sum;
-              }
             hess += c * (u * u.transpose() + r * hw);
           }
           return 0.0;
