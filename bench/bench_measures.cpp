@@ -77,7 +77,9 @@
 #define HOM_PLOT_SCRIPT "bench/plot_measures.py"
 #endif
 
+#include "harness.hpp"
 #include "hom/io/json.hpp"
+#include "hom/io/report.hpp"
 
 namespace {
 
@@ -117,22 +119,7 @@ class OutputFile {
 // --------------------------------------------------------------------------
 // Checks of the thesis's claims.
 
-class Checks {
- public:
-  void expect(bool ok, const std::string& what) {
-    ++count_;
-    if (!ok) {
-      failures_.push_back(what);
-      std::cerr << "bench_measures: CHECK FAILED: " << what << '\n';
-    }
-  }
-  int count() const { return count_; }
-  const std::vector<std::string>& failures() const { return failures_; }
-
- private:
-  int count_ = 0;
-  std::vector<std::string> failures_;
-};
+using hom::bench::Checks;
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -462,6 +449,7 @@ void check_level_set_study(const LevelSetStudy& s, Checks& checks, bool check_or
 Json level_set_case(const LevelSetStudy& s, bool order_claimed) {
   Json c = Json::object();
   c.set("name", s.name)
+      .set("stage", "level sets")
       .set("figure", s.figure)
       .set("family", s.family)
       .set("p", s.p)
@@ -726,7 +714,7 @@ void run_plot(const Options& o) {
 int run(const Options& o) {
   const auto t_start = Clock::now();
   fs::create_directories(o.out);
-  Checks checks;
+  Checks checks{"bench_measures"};
   Json cases = Json::array();
 
   // ---- the cubic triangle: equispaced (figure 3.5) and warp & blend (figure 3.6)
@@ -790,6 +778,7 @@ int run(const Options& o) {
   {
     Json c = Json::object();
     c.set("name", "fig3_4")
+        .set("stage", "node sweep")
         .set("figure", "3.4, table 3.1")
         .set("family", "triangle")
         .set("p", p)
@@ -863,6 +852,7 @@ int run(const Options& o) {
   {
     Json c = Json::object();
     c.set("name", "fig4_5")
+        .set("stage", "distortion curve")
         .set("figure", "4.5")
         .set("family", "triangle")
         .set("p", 1)
@@ -892,6 +882,7 @@ int run(const Options& o) {
 
     Json d = Json::object();
     d.set("name", "fig4_6")
+        .set("stage", "level sets")
         .set("figure", "4.6")
         .set("family", "triangle")
         .set("p", 1)
@@ -966,12 +957,7 @@ int run(const Options& o) {
   if (o.json) {
     Json report = Json::object();
     report.set("tool", "bench_measures").set("version", HOM_VERSION).set("cases", std::move(cases));
-    Json checks_json = Json::object();
-    checks_json.set("count", checks.count());
-    Json failed = Json::array();
-    for (const auto& f : checks.failures()) failed.push(f);
-    checks_json.set("failed", std::move(failed));
-    report.set("checks", std::move(checks_json)).set("time_s", total);
+    report.set("checks", hom::io::checks_json(checks.all())).set("time_s", total);
     if (o.json->has_parent_path()) fs::create_directories(o.json->parent_path());
     OutputFile js(*o.json);
     report.write(js.stream());

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <iostream>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -20,6 +21,7 @@
 
 #include <Eigen/Dense>
 
+#include "hom/io/report.hpp"
 #include "hom/mesh/mesh.hpp"
 
 namespace hom::bench {
@@ -107,5 +109,28 @@ int perturb_free_nodes(MeshT& mesh, double amplitude, std::uint64_t seed) {
   }
   return moved;
 }
+
+/// The thesis's claims a harness checks: each one is recorded (for the
+/// report's "checks", io::write_report) and a failed one is announced on
+/// stderr at once; the harness's exit status is non-zero when any failed.
+class Checks {
+ public:
+  explicit Checks(std::string tool) : tool_(std::move(tool)) {}
+  void expect(bool holds, const std::string& claim) {
+    all_.push_back({claim, holds});
+    if (!holds) {
+      failures_.push_back(claim);
+      std::cerr << tool_ << ": CHECK FAILED: " << claim << '\n';
+    }
+  }
+  int count() const { return int(all_.size()); }
+  const std::vector<std::string>& failures() const { return failures_; }
+  const std::vector<io::Check>& all() const { return all_; }
+
+ private:
+  std::string tool_;
+  std::vector<io::Check> all_;
+  std::vector<std::string> failures_;
+};
 
 }  // namespace hom::bench

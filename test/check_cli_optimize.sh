@@ -14,6 +14,7 @@ trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 py=/usr/bin/python3
 [[ -x $py ]] || py=python3
+schema="$(dirname "$0")/check_report_schema.py"   # DESIGN.md's report schema
 
 # json_field FILE STAGE KEY: the KEY of the case whose stage is STAGE.
 json_field() {
@@ -53,6 +54,7 @@ optimize_case() {
   [[ $(json_field "$json" optimized iterations) -gt 0 ]] || fail "$name: json: no iterations"
   json_field "$json" optimized stop_reason >/dev/null || fail "$name: json: no stop_reason"
   json_field "$json" optimized time_s >/dev/null || fail "$name: json: no time_s"
+  "$py" "$schema" "$json" --tool "hom optimize" --stage initial --stage optimized || fail "$name: json: not the DESIGN.md schema"
 }
 
 optimize_case tri3 tri 3 4 4.1 --vtu "$work/tri3.vtu"

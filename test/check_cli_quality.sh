@@ -56,6 +56,58 @@ grep -q "INVALID" <<<"$out" || fail "tangled: no INVALID line"
 # Absolute (equilateral) ideal and Oddy measure run and report the same validity.
 "$hom" quality "$work/valid3.msh" --ideal equilateral --measure oddy >/dev/null || fail "equilateral/oddy"
 
+# Surface meshes (chapter 5): two curved quadratic triangles in 3D, off z = 0.
+write_surface() {  # $1 = file, $2 = position of node 7 (midpoint of edge 3-1)
+  cat > "$1" <<MSH
+\$MeshFormat
+4.1 0 8
+\$EndMeshFormat
+\$Nodes
+1 9 1 9
+2 1 0 9
+1
+2
+3
+4
+5
+6
+7
+8
+9
+0 0 0
+1 0 0
+0 1 0
+1 1 0.3
+0.5 0 0.05
+0.5 0.5 0.1
+$2
+1 0.5 0.2
+0.5 1 0.2
+\$EndNodes
+\$Elements
+1 2 1 2
+2 1 9 2
+1 1 2 3 5 6 7
+2 2 4 3 8 9 6
+\$EndElements
+MSH
+}
+write_surface "$work/surface.msh" "0 0.5 0.05"
+write_surface "$work/folded_surface.msh" "0.8 0.1 0.05"   # edge node pulled through its element
+"$hom" convert "$work/surface.msh" "$work/surface3.msh" --order 3 || fail "convert surface"
+out=$("$hom" quality "$work/surface3.msh" --json "$work/s.json" --vtu "$work/s.vtu"); rc=$?
+[[ $rc -eq 0 ]] || fail "surface mesh: exit $rc: $out"
+grep -q "surface mesh" <<<"$out" || fail "surface mesh: not reported as a surface mesh"
+grep -q "valid at every quadrature point" <<<"$out" || fail "surface mesh: no validity line"
+grep -q '"inverted": 0' "$work/s.json" || fail "surface json: inverted != 0"
+grep -q '"surface": true' "$work/s.json" || fail "surface json: no surface flag"
+grep -q '"max_q": 1' "$work/s.json" && fail "surface json: curved elements scored q = 1"
+grep -q 'Name="quality"' "$work/s.vtu" || fail "surface vtu: no quality array"
+"$hom" quality "$work/surface3.msh" --ideal equilateral --measure oddy >/dev/null || fail "surface equilateral/oddy"
+out=$("$hom" quality "$work/folded_surface.msh" --json "$work/f.json"); rc=$?
+[[ $rc -eq 3 ]] || fail "folded surface mesh: exit $rc, expected 3"
+grep -q '"inverted": 1' "$work/f.json" || fail "folded surface json: expected 1 inverted"
+
 # Bad input: truncated file -> exit 1, message names the file, no output file.
 head -n 12 "$work/valid.msh" > "$work/truncated.msh"
 err=$("$hom" quality "$work/truncated.msh" --json "$work/x.json" 2>&1 >/dev/null); rc=$?

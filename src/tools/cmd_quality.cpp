@@ -5,6 +5,14 @@
 // table of the element quality q_E (definition 3.6) and of the scaled
 // Jacobian, and optionally writes a VTU colored by element and point-wise
 // quality with the invalid elements flagged.
+//
+// Surface meshes (triangles or quadrilaterals with nodes off z = 0) get the
+// surface measure of chapter 5 (J-bar of eq 5.5, definitions 5.1-5.2), from
+// the 3D node coordinates alone: the ideal is each element's straight-sided
+// facet (or the equilateral triangle / unit square), and an element is invalid
+// where its curved tangent plane turns over with respect to the normal of its
+// own straight-sided facet (no geometry is needed, so an element whose facet
+// itself is flipped with respect to its neighbours is not detected).
 
 #include <cstdio>
 #include <iostream>
@@ -17,6 +25,7 @@
 #include "hom/measure/oddy_measure.hpp"
 #include "hom/measure/shape_measure.hpp"
 #include "hom/quality/mesh_quality.hpp"
+#include "hom/surface/surface_mesh_quality.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
 
@@ -40,21 +49,28 @@ void print_row(const char* label, const hom::Statistics& s) {
 template <class MeshT, class Measure>
 int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
   using F = typename MeshT::family;
+  constexpr bool surface = MeshT::space_dim != MeshT::dim;
   const hom::IdealKind ideal = hom::parse_ideal_kind(o.ideal);
   const auto& rule = o.quadrature == "thesis" ? hom::quadrature_for<F, hom::ThesisExactness>(mesh.degree())
                                               : hom::quadrature_for<F, hom::DefaultExactness>(mesh.degree());
-  const hom::MeshQuality q = hom::mesh_quality(mesh, measure, ideal, rule);
+  hom::MeshQuality q;
+  if constexpr (surface)
+    q = hom::surface_mesh_quality(mesh, measure, ideal, rule);
+  else
+    q = hom::mesh_quality(mesh, measure, ideal, rule);
   const hom::Statistics qs = q.quality_statistics(), sj = q.scaled_jacobian_statistics();
   const std::string ideal_name = ideal == hom::IdealKind::regular ? "equilateral" : "straight-sided";
 
-  std::printf("%s: %s of degree %d, %d elements, %d nodes\n", o.path.c_str(), std::string(F::name).c_str(),
-              mesh.degree(), mesh.num_elements(), mesh.num_nodes());
+  std::printf("%s: %s%s of degree %d, %d elements, %d nodes\n", o.path.c_str(), surface ? "surface mesh, " : "",
+              std::string(F::name).c_str(), mesh.degree(), mesh.num_elements(), mesh.num_nodes());
+  if (surface)
+    std::printf("surface measure (chapter 5, eq 5.5), oriented by each element's straight-sided facet\n");
   std::printf("measure %s, ideal %s, quadrature %s (exact to degree %d, %d points per element)\n\n",
               std::string(Measure::name).c_str(), ideal_name.c_str(), o.quadrature.c_str(), rule.exactness, rule.size());
   std::printf("  %-16s %8s %8s %8s %9s %6s\n", "", "Min", "Max", "Mean", "Std.Dev.", "#inv");
   print_row("quality", qs);
   print_row("scaled Jacobian", sj);
-  std::printf("\nmesh quality q_M = %.6f (eq 3.26); %s\n", q.mesh_quality,
+  std::printf("\nmesh quality q_M = %.6f (eq 3.26%s); %s\n", q.mesh_quality, surface ? ", defs. 5.1-5.2" : "",
               q.inverted() ? "INVALID: some elements have det <= 0 at a quadrature point" : "valid at every quadrature point");
 
   if (!o.vtu.empty()) {
@@ -65,7 +81,12 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
     }
     hom::io::VtuOptions vo;
     vo.interpolate_point_data = false;
-    hom::io::write_vtu(o.vtu, mesh, {{"pointwise_quality", 1, hom::nodal_mesh_quality(mesh, measure, ideal, rule)}},
+    std::vector<double> nodal;
+    if constexpr (surface)
+      nodal = hom::surface_nodal_mesh_quality(mesh, measure, ideal, rule);
+    else
+      nodal = hom::nodal_mesh_quality(mesh, measure, ideal, rule);
+    hom::io::write_vtu(o.vtu, mesh, {{"pointwise_quality", 1, std::move(nodal)}},
                        {{"quality", 1, q.qualities()}, {"scaled_jacobian", 1, sjac}, {"inverted", 1, inverted}}, vo);
     std::printf("wrote %s\n", o.vtu.c_str());
   }
@@ -73,7 +94,7 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
     hom::io::CaseHeader h{o.path, std::string(F::name), mesh.degree(), mesh.num_elements(), mesh.num_nodes(),
                           "input", std::string(Measure::name), ideal_name};
     auto c = hom::io::quality_case(h, qs, sj);
-    c.set("mesh_quality", q.mesh_quality).set("quadrature_exactness", rule.exactness);
+    c.set("mesh_quality", q.mesh_quality).set("quadrature_exactness", rule.exactness).set("surface", surface);
     hom::io::write_report(o.json, "hom quality", HOM_VERSION, {std::move(c)});
   }
   return q.inverted() ? 3 : 0;
@@ -84,7 +105,8 @@ int run(int argc, char** argv) {
   po::options_description opts(
       "hom quality MESH [options]\n\n"
       "Validate a high-order mesh: element quality q_E (thesis def. 3.6) and scaled Jacobian\n"
-      "statistics. Exit status 0 when every element is valid, 3 when some are invalid.\n\noptions");
+      "statistics. Surface meshes (triangles/quadrilaterals in 3D) use the surface measure of\n"
+      "chapter 5 (defs. 5.1-5.2). Exit status 0 when every element is valid, 3 when some are invalid.\n\noptions");
   opts.add_options()("help,h", "show this help")                                                       //
       ("measure", po::value(&o.measure)->default_value("shape"), "distortion measure: shape | oddy")  //
       ("ideal", po::value(&o.ideal)->default_value("straight"),
@@ -110,15 +132,8 @@ int run(int argc, char** argv) {
 
   const auto data = hom::io::read_msh_data(o.path);
   return hom::tools::with_mesh<hom::WarpBlend>(data, [&](auto& mesh) -> int {
-    using M = std::decay_t<decltype(mesh)>;
-    if constexpr (M::space_dim != M::dim) {
-      throw std::runtime_error(o.path +
-                               ": a surface mesh (2D elements in 3D); surface quality (chapter 5) is not available yet");
-      return 1;
-    } else {
-      if (o.measure == "oddy") return report(mesh, hom::OddyMeasure{}, o);
-      return report(mesh, hom::ShapeMeasure{}, o);
-    }
+    if (o.measure == "oddy") return report(mesh, hom::OddyMeasure{}, o);
+    return report(mesh, hom::ShapeMeasure{}, o);
   });
 }
 

@@ -48,11 +48,31 @@ inline Json quality_case(const CaseHeader& h, const Statistics& quality, const S
   return c;
 }
 
-/// Writes {"tool", "version", "cases"} to `path` (FILE.tmp, then renamed).
+/// One checked claim of the thesis (harnesses): the text and whether it held.
+struct Check {
+  std::string claim;
+  bool holds = false;
+};
+
+/// The report's "checks": [{"claim", "holds"}, ...].
+inline Json checks_json(const std::vector<Check>& checks) {
+  Json::Array list;
+  for (const auto& c : checks) {
+    Json j = Json::object();
+    j.set("claim", c.claim).set("holds", c.holds);
+    list.push_back(std::move(j));
+  }
+  return Json(std::move(list));
+}
+
+/// Writes {"tool", "version", "cases"[, "checks"]} to `path` (FILE.tmp, then
+/// renamed). `checks`, when given, lists the harness's claim checks as
+/// {"claim", "holds"} objects beside the cases (they are not meshes).
 inline void write_report(const std::string& path, const std::string& tool, const std::string& version,
-                         std::vector<Json> cases) {
+                         std::vector<Json> cases, const std::vector<Check>& checks = {}) {
   Json report = Json::object();
   report.set("tool", tool).set("version", version).set("cases", Json(Json::Array(std::move(cases))));
+  if (!checks.empty()) report.set("checks", checks_json(checks));
   std::ostringstream os;
   report.write(os);
   os << "\n";

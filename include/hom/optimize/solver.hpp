@@ -34,7 +34,10 @@
 ///      one iteration, both values with delta = 0);
 ///   3. quality stagnation: every element valid during the last
 ///      `stagnation_window` iterations and the minimum element quality grew
-///      by at most `quality_tolerance` over them;
+///      over them by at most `quality_tolerance` relative to its value
+///      (q_best - q_first <= tol * q_best): relative, so that a mesh whose
+///      worst element is still poor (q = 0.01 growing by 1e-4 per iteration)
+///      is not taken for converged;
 ///   4. valid long enough (off unless iterations_after_valid >= 0): every element
 ///      valid for the last iterations_after_valid iterations; the early exit of
 ///      a p-continuation stage, whose job is a valid start for the next stage;
@@ -114,7 +117,7 @@ struct SolverOptions {
   int max_iterations = 200;
   double gradient_tolerance = 1e-8;   ///< criterion 1
   double objective_tolerance = 1e-6; ///< criterion 2
-  double quality_tolerance = 1e-3;    ///< criterion 3
+  double quality_tolerance = 1e-3;    ///< criterion 3 (relative)
   int stagnation_window = 3;          ///< criterion 3
   int iterations_after_valid = -1;    ///< criterion 4 (< 0: off)
   double target_quality = 0.0;        ///< criterion 5 (<= 0: off)
@@ -182,6 +185,13 @@ struct LineSearch {
 };
 
 namespace detail {
+
+/// Criterion 3: over the window (oldest first), the best minimum quality is
+/// at most `tolerance` (relative) above the oldest.
+inline bool quality_stagnated(const std::deque<double>& window, double tolerance) {
+  const double best = *std::max_element(window.begin(), window.end());
+  return best - window.front() <= tolerance * best;
+}
 
 /// What a solver's step reports to the outer loop.
 struct StepOutcome {
@@ -270,7 +280,7 @@ SolverResult run_outer_loop(Problem& problem, const SolverOptions& opt, std::str
       recent_quality.push_back(state.min_quality);
       if (int(recent_quality.size()) > opt.stagnation_window + 1) recent_quality.pop_front();
       if (!stopped && opt.stagnation_window > 0 && int(recent_quality.size()) == opt.stagnation_window + 1 &&
-          *std::max_element(recent_quality.begin(), recent_quality.end()) - recent_quality.front() <= opt.quality_tolerance) {
+          quality_stagnated(recent_quality, opt.quality_tolerance)) {
         res.reason = StopReason::quality_stagnation;
         res.converged = true;
         stopped = true;

@@ -1,0 +1,577 @@
+/// @file bench_surface.cpp
+/// Reproduction harness for chapter 5 (issue 6): high-order meshes on
+/// parameterized surfaces. One program, a registry of cases (--case NAME,
+/// repeatable; default: every case; --list prints them):
+///
+///   appendixF   appendix F, figures F.1-F.4: level sets of the shape and Oddy
+///               element quality (defs. 5.1-5.2 on J-bar, eq 5.5) of a degree-3
+///               triangle (warp & blend nodes, equilateral ideal of unit edge)
+///               and a degree-3 quadrilateral (Gauss-Lobatto nodes, unit-square
+///               ideal) on a cylinder (F.1, F.2) and on a hyperbolic paraboloid
+///               (F.3, F.4), when one node (a vertex, an edge node, a face node)
+///               moves over a grid of the surface's parameters (u, v) and all
+///               the others stay in the ideal configuration. Claims checked:
+///               both measures determine the same feasible region (grid points
+///               where exactly one quality is zero: 0), Oddy is the stricter
+///               (q_oddy <= q_shape), both detect the same ideal location
+///               (their maxima at the same grid point), q <= 1; the edge and
+///               face regions are bounded (inside the window).
+///
+/// Adding a case (section 5.5.1.1 consistency, table 5.2, robustness): write
+/// `void run_xxx(Context&)` that appends JSON cases to ctx.cases, claim checks
+/// to ctx.checks and files under ctx.o.out, and add a line to `registry()`.
+///
+/// Outputs (--out DIR, default results/surface): CSV per case, PNG figures
+/// through bench/plot_surface.py (/usr/bin/python3 + matplotlib; --no-plot to
+/// skip), JSON report (--json FILE, default DIR/surface.json; DESIGN.md
+/// schema). Exit status: 0 when every claim check passes, 1 when one fails,
+/// 2 on errors.
+///
+/// Element placement (appendix F gives no dimensions): the parameter-space
+/// element is the ideal's node set, centred at the parameter origin, with
+/// parameters that are lengths at the origin: on the cylinder of radius 1
+/// u = arc length / radius (the development of the cylinder is an isometry,
+/// so the physical element is the ideal wrapped around the cylinder); on the
+/// saddle z = u^2 - v^2 (a = b = 1, principal curvatures +-2 at the origin)
+/// u, v are the coordinates of the (e1, e2) plane. The free node moves in
+/// parameter space; the quality is of the physical element x_i = phi(u_i)
+/// (eq 5.9), oriented by the surface normal (surface_normals).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <boost/program_options.hpp>
+
+#include "harness.hpp"
+#include "hom/basis/lagrange.hpp"
+#include "hom/element/cube.hpp"
+#include "hom/element/node_layout.hpp"
+#include "hom/element/simplex.hpp"
+#include "hom/geometry/cylinder.hpp"
+#include "hom/geometry/hyperbolic_paraboloid.hpp"
+#include "hom/io/error.hpp"
+#include "hom/io/json.hpp"
+#include "hom/io/report.hpp"
+#include "hom/measure/oddy_measure.hpp"
+#include "hom/measure/shape_measure.hpp"
+#include "hom/mesh/mesh.hpp"
+#include "hom/nodes/gauss_lobatto.hpp"
+#include "hom/nodes/warp_blend.hpp"
+#include "hom/quadrature/quadrature_policy.hpp"
+#include "hom/quality/ideal.hpp"
+#include "hom/quality/tabulation.hpp"
+#include "hom/surface/surface_element_quality.hpp"
+
+#ifndef HOM_VERSION
+#define HOM_VERSION "unknown"
+#endif
+#ifndef HOM_PLOT_SCRIPT
+#define HOM_PLOT_SCRIPT "bench/plot_surface.py"
+#endif
+
+namespace {
+
+using namespace hom;
+using hom::bench::fmt;
+using hom::bench::seconds_since;
+using hom::io::Json;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using UVs = Eigen::Matrix<double, 2, Eigen::Dynamic>;
+using Quadrature = ThesisExactness;
+
+// --------------------------------------------------------------------------
+// Harness plumbing: options, claim checks, files, the case registry.
+
+struct Options {
+  fs::path out = "results/surface";
+  std::optional<fs::path> json;
+  bool plot = true;
+  fs::path plot_script = HOM_PLOT_SCRIPT;
+  int grid = 101;  ///< level-set grid points per axis
+  std::vector<std::string> cases;
+};
+
+using hom::bench::Checks;
+
+struct Context {
+  Options o;
+  Checks checks{"bench_surface"};
+  std::vector<Json> cases;
+};
+
+/// Writes `text` to DIR/name atomically (no partial file on failure).
+void write_text(const fs::path& path, const std::string& text) {
+  hom::io::write_atomically(path.string(),
+                            [&](std::FILE* f) { hom::io::write_all(f, path.string(), text.data(), text.size()); });
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+void run_plot(const Options& o) {
+  const std::string python = "/usr/bin/python3";
+  if (!fs::exists(python)) {
+    std::printf("plot: %s not found; skipping the PNG figures\n", python.c_str());
+    return;
+  }
+  if (std::system((python + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
+    std::printf("plot: matplotlib is not available to %s; skipping the PNG figures\n", python.c_str());
+    return;
+  }
+  if (!fs::exists(o.plot_script)) {
+    std::printf("plot: script %s not found; skipping the PNG figures\n", o.plot_script.string().c_str());
+    return;
+  }
+  const std::string cmd = python + " " + shell_quote(o.plot_script.string()) + " " + shell_quote(o.out.string());
+  std::printf("plot: %s\n", cmd.c_str());
+  std::fflush(stdout);
+  if (std::system(cmd.c_str()) != 0) std::printf("plot: the plotting script failed (CSV files are complete)\n");
+}
+
+Json point_json(double x, double y) { return Json::array({x, y}); }
+
+// --------------------------------------------------------------------------
+// Appendix F.
+
+/// A surface of the study with the scale that turns the ideal's planar
+/// coordinates into its parameters at the origin.
+template <class G>
+struct StudySurface {
+  std::string key, label;
+  G geometry;
+  double u_scale = 1.0;  ///< u = x / u_scale (radius of the cylinder)
+  double max_half_width_u = 3.0, max_half_width_v = 3.0;
+};
+
+struct Window {
+  double u0, u1, v0, v1;
+};
+
+struct FreeNode {
+  std::string key;  ///< vertex, edge, face
+  int node = 0;     ///< hom local node number
+};
+
+struct LevelSet {
+  std::string free_node;
+  int node = 0;
+  Window window{};
+  int n = 0;
+  Eigen::Vector2d ideal_uv = Eigen::Vector2d::Zero();  ///< the node's own (ideal) parameters
+  int feasible_shape = 0, feasible_oddy = 0;
+  int mismatch = 0;          ///< grid points where exactly one quality is > 0
+  int border_feasible = 0;   ///< feasible points on the window's border
+  int oddy_above_shape = 0;  ///< points with q_oddy > q_shape
+  double max_shape = 0.0, max_oddy = 0.0;
+  Eigen::Vector2d argmax_shape = Eigen::Vector2d::Zero(), argmax_oddy = Eigen::Vector2d::Zero();
+  double q_ideal_shape = 0.0, q_ideal_oddy = 0.0;  ///< at the node's own position
+  double area_shape = 0.0;   ///< feasible area in parameter units
+  double du = 0.0, dv = 0.0;
+};
+
+struct Study {
+  std::string name, figure, surface, family, node_set;
+  int p = 3, nodes = 0;
+  std::vector<LevelSet> sets;
+  double time_s = 0.0;
+};
+
+/// The element of a study: tabulation, parameter nodes of the ideal
+/// configuration, the ideal in R^3, the free nodes.
+template <ElementFamily Family>
+struct StudyElement {
+  const Tabulation<Family>* tab = nullptr;
+  UVs uv;                             ///< parameters of the ideal configuration
+  SurfaceIdealVertices<Family> ideal;
+  std::vector<FreeNode> free_nodes;
+  Eigen::MatrixXd boundary_basis;     ///< Lagrange values at the boundary samples (samples x n)
+};
+
+template <ElementFamily Family, NodeSet Nodes>
+StudyElement<Family> make_study_element(int p, double u_scale) {
+  StudyElement<Family> e;
+  e.tab = &tabulation<Family, Nodes>(p, quadrature_for<Family, Quadrature>(p));
+  const IdealVertices<Family> v = regular_ideal_vertices<Family>();
+  e.ideal = embed_ideal<Family>(v);
+  const Eigen::Vector2d centroid = v.rowwise().mean();
+  const auto lv = detail::vertex_shape_matrix<Family, Nodes>(p);  // num_vertices x n
+  e.uv = (v * lv).colwise() - centroid;
+  e.uv.row(0) /= u_scale;
+  const auto& layout = node_layout<Family>(p);
+  // Vertex 2: the apex of the triangle, corner (1, 1) of the square; the
+  // first interior node of edge 0; the first interior (face) node.
+  e.free_nodes = {{"vertex", 2}, {"edge", layout.edge_nodes(0).front()}, {"face", layout.interior_nodes().front()}};
+  // Boundary loop samples for the drawings.
+  std::vector<typename Family::Point> pts;
+  constexpr int nv = Family::num_vertices, per_edge = 24;
+  for (int k = 0; k < nv; ++k)
+    for (int s = 0; s <= per_edge; ++s) {
+      const double t = double(s) / per_edge;
+      pts.push_back((1 - t) * Family::vertex(k) + t * Family::vertex((k + 1) % nv));
+    }
+  e.boundary_basis = lagrange_basis<Family, Nodes>(p).values(pts);
+  return e;
+}
+
+struct Qualities {
+  double shape = 0.0, oddy = 0.0;
+};
+
+template <ElementFamily Family, class G>
+Qualities qualities(const StudyElement<Family>& e, const G& g, const UVs& U) {
+  const ElementNodes<3> X = surface_points(g, U);
+  const SurfaceNormals n = surface_normals(*e.tab, g, U);
+  return {surface_element_quality<Family>(*e.tab, X, e.ideal, n, ShapeMeasure{}).quality,
+          surface_element_quality<Family>(*e.tab, X, e.ideal, n, OddyMeasure{}).quality};
+}
+
+/// Feasible points (q_shape > 0) on the border of an m x m sample of w.
+template <ElementFamily Family, class G>
+int border_feasible(const StudyElement<Family>& e, const G& g, int node, const Window& w, int m) {
+  UVs U = e.uv;
+  int count = 0;
+  for (int k = 0; k < 4 * (m - 1); ++k) {
+    const int side = k / (m - 1), s = k % (m - 1);
+    const double t = double(s) / (m - 1);
+    Eigen::Vector2d p;
+    if (side == 0) p = {w.u0 + t * (w.u1 - w.u0), w.v0};
+    else if (side == 1) p = {w.u1, w.v0 + t * (w.v1 - w.v0)};
+    else if (side == 2) p = {w.u1 - t * (w.u1 - w.u0), w.v1};
+    else p = {w.u0, w.v1 - t * (w.v1 - w.v0)};
+    U.col(node) = p;
+    count += qualities(e, g, U).shape > 0.0;
+  }
+  return count;
+}
+
+/// The window of a free node: a square around its ideal position, grown by
+/// 1.5x until the feasible region no longer reaches its border (sampled
+/// coarsely) or the surface's cap is reached (then the region is truncated
+/// and reported as such).
+template <ElementFamily Family, class G>
+Window find_window(const StudyElement<Family>& e, const StudySurface<G>& s, int node) {
+  const Eigen::Vector2d c = e.uv.col(node);
+  double hu = 0.5 / s.u_scale, hv = 0.5;
+  for (;;) {
+    hu = std::min(hu, s.max_half_width_u);
+    hv = std::min(hv, s.max_half_width_v);
+    const Window w{c[0] - hu, c[0] + hu, c[1] - hv, c[1] + hv};
+    const bool capped = hu >= s.max_half_width_u && hv >= s.max_half_width_v;
+    if (capped || border_feasible(e, s.geometry, node, w, 41) == 0) {
+      // 10% margin so that the region's boundary is resolved inside, and the
+      // whole element inside the window (the figures draw it on the patch).
+      const double mu = capped ? 0.0 : 0.1 * hu, mv = capped ? 0.0 : 0.1 * hv;
+      const Eigen::Vector2d lo = e.uv.rowwise().minCoeff(), hi = e.uv.rowwise().maxCoeff();
+      const double eu = 0.05 * (hi[0] - lo[0]), ev = 0.05 * (hi[1] - lo[1]);
+      return {std::min(w.u0 - mu, lo[0] - eu), std::max(w.u1 + mu, hi[0] + eu), std::min(w.v0 - mv, lo[1] - ev),
+              std::max(w.v1 + mv, hi[1] + ev)};
+    }
+    hu *= 1.5;
+    hv *= 1.5;
+  }
+}
+
+template <ElementFamily Family, class G>
+LevelSet level_set(const StudyElement<Family>& e, const StudySurface<G>& s, const FreeNode& f, int n,
+                   const std::string& prefix, std::ostringstream& csv) {
+  LevelSet ls;
+  ls.free_node = f.key;
+  ls.node = f.node;
+  ls.n = n;
+  ls.ideal_uv = e.uv.col(f.node);
+  ls.window = find_window(e, s, f.node);
+  const Window& w = ls.window;
+  ls.du = (w.u1 - w.u0) / (n - 1);
+  ls.dv = (w.v1 - w.v0) / (n - 1);
+  const Qualities q0 = qualities(e, s.geometry, e.uv);
+  ls.q_ideal_shape = q0.shape;
+  ls.q_ideal_oddy = q0.oddy;
+  UVs U = e.uv;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d p(w.u0 + ls.du * i, w.v0 + ls.dv * j);
+      U.col(f.node) = p;
+      const Qualities q = qualities(e, s.geometry, U);
+      const Eigen::Vector3d x = s.geometry.evaluate(p);
+      csv << prefix << f.key << ',' << i << ',' << j << ',' << p[0] << ',' << p[1] << ',' << x[0] << ',' << x[1] << ','
+          << x[2] << ',' << q.shape << ',' << q.oddy << '\n';
+      ls.feasible_shape += q.shape > 0;
+      ls.feasible_oddy += q.oddy > 0;
+      ls.mismatch += (q.shape > 0) != (q.oddy > 0);
+      ls.oddy_above_shape += q.oddy > q.shape * (1 + 1e-12);
+      if ((q.shape > 0 || q.oddy > 0) && (i == 0 || j == 0 || i == n - 1 || j == n - 1)) ++ls.border_feasible;
+      if (q.shape > ls.max_shape) {
+        ls.max_shape = q.shape;
+        ls.argmax_shape = p;
+      }
+      if (q.oddy > ls.max_oddy) {
+        ls.max_oddy = q.oddy;
+        ls.argmax_oddy = p;
+      }
+    }
+  ls.area_shape = ls.feasible_shape * ls.du * ls.dv;
+  return ls;
+}
+
+/// Element drawing rows: kind (boundary | node | free), index, u, v, x, y, z.
+/// The boundary is the physical element's (sum x_i N_i), with its parameters
+/// by projection onto the surface.
+template <ElementFamily Family, class G>
+void write_element(std::ostringstream& os, const std::string& prefix, const StudyElement<Family>& e, const G& g,
+                   const FreeNode& f) {
+  const ElementNodes<3> X = surface_points(g, e.uv);
+  const Eigen::Matrix3Xd b = X * e.boundary_basis.transpose();
+  for (Eigen::Index k = 0; k < b.cols(); ++k) {
+    Eigen::Vector2d uv = g.project(b.col(k));
+    // Unwrap periodic parameters next to the element's.
+    for (int a = 0; a < 2; ++a) uv[a] = g.range(a).unwrap(uv[a], e.uv(a, 0));
+    os << prefix << f.key << ",boundary," << k << ',' << uv[0] << ',' << uv[1] << ',' << b(0, k) << ',' << b(1, k)
+       << ',' << b(2, k) << '\n';
+  }
+  for (Eigen::Index i = 0; i < X.cols(); ++i)
+    os << prefix << f.key << ',' << (i == f.node ? "free" : "node") << ',' << i << ',' << e.uv(0, i) << ','
+       << e.uv(1, i) << ',' << X(0, i) << ',' << X(1, i) << ',' << X(2, i) << '\n';
+}
+
+template <ElementFamily Family, NodeSet Nodes, class G>
+Study appendix_f_study(const std::string& figure, const StudySurface<G>& s, int n, std::ostringstream& levels,
+                       std::ostringstream& elements) {
+  const auto t0 = Clock::now();
+  constexpr int p = 3;
+  const StudyElement<Family> e = make_study_element<Family, Nodes>(p, s.u_scale);
+  Study st;
+  st.figure = figure;
+  st.surface = s.key;
+  st.family = std::string(Family::name);
+  st.node_set = std::string(Nodes::name);
+  st.name = "appendixF_" + s.key + "_" + st.family;
+  st.p = p;
+  st.nodes = static_cast<int>(e.uv.cols());
+  const std::string prefix = s.key + ',' + st.family + ',';
+  for (const FreeNode& f : e.free_nodes) {
+    st.sets.push_back(level_set(e, s, f, n, prefix, levels));
+    write_element(elements, prefix, e, s.geometry, f);
+  }
+  st.time_s = seconds_since(t0);
+  return st;
+}
+
+void check_study(const Study& s, Checks& checks) {
+  for (const LevelSet& ls : s.sets) {
+    const std::string who = s.name + " " + ls.free_node;
+    checks.expect(ls.mismatch == 0, who + ": shape and Oddy feasible regions differ at " +
+                                        std::to_string(ls.mismatch) + " grid points");
+    checks.expect(ls.oddy_above_shape == 0,
+                  who + ": Oddy quality above shape quality at " + std::to_string(ls.oddy_above_shape) + " points");
+    checks.expect(ls.max_shape <= 1.0 + 1e-12 && ls.max_oddy <= 1.0 + 1e-12, who + ": quality above 1");
+    checks.expect(ls.feasible_shape > 0, who + ": no feasible position in the window");
+    // Same ideal location: the maxima of both qualities at the same grid
+    // point (one cell apart at most, for ties on a flat top).
+    const Eigen::Vector2d d = ls.argmax_shape - ls.argmax_oddy;
+    checks.expect(std::abs(d[0]) <= 1.01 * ls.du && std::abs(d[1]) <= 1.01 * ls.dv,
+                  who + ": shape and Oddy maxima at different locations");
+    // The ideal location is near the node's own position (the element is
+    // the ideal wrapped onto the surface): within 10% of the window.
+    const Eigen::Vector2d m = ls.argmax_shape - ls.ideal_uv;
+    checks.expect(std::abs(m[0]) <= 0.1 * (ls.window.u1 - ls.window.u0) &&
+                      std::abs(m[1]) <= 0.1 * (ls.window.v1 - ls.window.v0),
+                  who + ": the best position is far from the node's ideal position");
+    if (ls.free_node != "vertex")
+      checks.expect(ls.border_feasible == 0, who + ": feasible region reaches the window border (" +
+                                                 std::to_string(ls.border_feasible) + " points)");
+  }
+}
+
+Json study_json(const Study& s) {
+  Json c = Json::object();
+  c.set("name", s.name)
+      .set("figure", s.figure)
+      .set("surface", s.surface)
+      .set("family", s.family)
+      .set("p", s.p)
+      .set("elements", 1)
+      .set("nodes", s.nodes)
+      .set("node_set", s.node_set)
+      .set("measure", Json::array({"shape", "oddy"}))
+      .set("ideal", s.family == "triangle" ? "equilateral (unit edge)" : "unit square")
+      .set("quadrature", std::string(Quadrature::name))
+      .set("grid", s.sets.empty() ? 0 : s.sets.front().n);
+  Json sets = Json::array();
+  for (const LevelSet& ls : s.sets) {
+    Json j = Json::object();
+    j.set("free_node", ls.free_node)
+        .set("node", ls.node)
+        .set("window_uv", Json::array({ls.window.u0, ls.window.u1, ls.window.v0, ls.window.v1}))
+        .set("ideal_uv", point_json(ls.ideal_uv[0], ls.ideal_uv[1]))
+        .set("feasible_points_shape", ls.feasible_shape)
+        .set("feasible_points_oddy", ls.feasible_oddy)
+        .set("feasible_area_uv", ls.area_shape)
+        .set("feasible_area_is_lower_bound", ls.border_feasible > 0)
+        .set("feasible_mismatch", ls.mismatch)
+        .set("feasible_on_border", ls.border_feasible)
+        .set("oddy_above_shape", ls.oddy_above_shape)
+        .set("q_shape_ideal_position", ls.q_ideal_shape)
+        .set("q_oddy_ideal_position", ls.q_ideal_oddy)
+        .set("max_q_shape", ls.max_shape)
+        .set("max_q_oddy", ls.max_oddy)
+        .set("argmax_q_shape", point_json(ls.argmax_shape[0], ls.argmax_shape[1]))
+        .set("argmax_q_oddy", point_json(ls.argmax_oddy[0], ls.argmax_oddy[1]));
+    sets.push(std::move(j));
+  }
+  c.set("free_nodes", std::move(sets));
+  Json thesis = Json::object();
+  thesis.set("feasible_regions_coincide", true)
+      .set("same_ideal_location", true)
+      .set("oddy_tends_to_zero_faster", true);
+  c.set("thesis", std::move(thesis)).set("time_s", s.time_s).set("peak_rss_mb", hom::bench::peak_rss_mb());
+  return c;
+}
+
+void run_appendix_f(Context& ctx) {
+  const int n = ctx.o.grid;
+  std::ostringstream levels, elements;
+  levels.precision(10);
+  elements.precision(10);
+  levels << "surface,family,free_node,i,j,u,v,x,y,z,shape,oddy\n";
+  elements << "surface,family,free_node,kind,index,u,v,x,y,z\n";
+
+  const StudySurface<Cylinder> cylinder{"cylinder", "cylinder of radius 1",
+                                        Cylinder(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 1.0), 1.0,
+                                        0.9 * std::numbers::pi, 3.0};
+  const StudySurface<HyperbolicParaboloid> saddle{"paraboloid", "hyperbolic paraboloid z = u^2 - v^2",
+                                                  HyperbolicParaboloid(), 1.0, 3.0, 3.0};
+  std::vector<Study> studies;
+  studies.push_back(appendix_f_study<Simplex<2>, WarpBlend>("F.1", cylinder, n, levels, elements));
+  studies.push_back(appendix_f_study<Cube<2>, GaussLobatto>("F.2", cylinder, n, levels, elements));
+  studies.push_back(appendix_f_study<Simplex<2>, WarpBlend>("F.3", saddle, n, levels, elements));
+  studies.push_back(appendix_f_study<Cube<2>, GaussLobatto>("F.4", saddle, n, levels, elements));
+  write_text(ctx.o.out / "appendixF_levelsets.csv", levels.str());
+  write_text(ctx.o.out / "appendixF_elements.csv", elements.str());
+
+  std::printf("Appendix F: level sets of the element quality, degree 3, free node moved over a %d x %d grid of (u, v)\n",
+              n, n);
+  std::printf("(quadrature: %s)\n", std::string(Quadrature::name).c_str());
+  std::printf("  figure  surface     family         free    window (u; v)                    q(ideal pos.)      "
+              "feasible pts    mismatch  best position (shape | oddy)\n");
+  std::printf("                                                                             shape    oddy       shape   oddy\n");
+  for (const Study& s : studies) {
+    check_study(s, ctx.checks);
+    ctx.cases.push_back(study_json(s));
+    for (const LevelSet& ls : s.sets)
+      std::printf("  %-6s  %-10s  %-13s  %-6s  [%5s,%5s; %5s,%5s]%s  %7s %7s   %6d %6d  %8d  (%s,%s) | (%s,%s)\n",
+                  s.figure.c_str(), s.surface.c_str(), s.family.c_str(), ls.free_node.c_str(),
+                  fmt(ls.window.u0).c_str(), fmt(ls.window.u1).c_str(), fmt(ls.window.v0).c_str(),
+                  fmt(ls.window.v1).c_str(), ls.border_feasible ? "*" : " ", fmt(ls.q_ideal_shape, 4).c_str(),
+                  fmt(ls.q_ideal_oddy, 4).c_str(), ls.feasible_shape, ls.feasible_oddy, ls.mismatch,
+                  fmt(ls.argmax_shape[0], 3).c_str(), fmt(ls.argmax_shape[1], 3).c_str(),
+                  fmt(ls.argmax_oddy[0], 3).c_str(), fmt(ls.argmax_oddy[1], 3).c_str());
+  }
+  std::printf("  (* the feasible region reaches the window, capped at the surface's limits: its size is a lower bound)\n");
+  std::printf("  thesis: both measures give the same feasible region and the same ideal location (figs F.1-F.4)\n\n");
+}
+
+// --------------------------------------------------------------------------
+// Registry.
+
+struct SurfaceCase {
+  std::string name;
+  std::string description;
+  std::function<void(Context&)> run;
+};
+
+const std::vector<SurfaceCase>& registry() {
+  static const std::vector<SurfaceCase> r = {
+      {"appendixF", "appendix F (figs F.1-F.4): shape/Oddy level sets, degree-3 tri and quad, cylinder and saddle",
+       run_appendix_f},
+  };
+  return r;
+}
+
+int run(Context& ctx) {
+  const auto t0 = Clock::now();
+  fs::create_directories(ctx.o.out);
+  std::vector<const SurfaceCase*> selected;
+  for (const auto& c : registry())
+    if (ctx.o.cases.empty() || std::find(ctx.o.cases.begin(), ctx.o.cases.end(), c.name) != ctx.o.cases.end())
+      selected.push_back(&c);
+  std::printf("bench_surface %s: chapter 5 reproduction, cases:", HOM_VERSION);
+  for (const auto* c : selected) std::printf(" %s", c->name.c_str());
+  std::printf("\n(timings on the machine that runs this; the thesis's are not comparable)\n\n");
+  for (const auto* c : selected) c->run(ctx);
+
+  const double total = seconds_since(t0);
+  const fs::path json = ctx.o.json.value_or(ctx.o.out / "surface.json");
+  if (json.has_parent_path()) fs::create_directories(json.parent_path());
+  hom::io::write_report(json.string(), "bench_surface", HOM_VERSION, ctx.cases, ctx.checks.all());
+  std::printf("%d/%d claim checks passed; CSV and JSON (%s) in %s (%.2f s, peak RSS %.0f MB)\n",
+              ctx.checks.count() - int(ctx.checks.failures().size()), ctx.checks.count(), json.string().c_str(),
+              ctx.o.out.string().c_str(), total, hom::bench::peak_rss_mb());
+  if (ctx.o.plot) run_plot(ctx.o);
+  if (!ctx.checks.failures().empty()) {
+    std::fprintf(stderr, "bench_surface: %zu claim checks failed\n", ctx.checks.failures().size());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  namespace po = boost::program_options;
+  Context ctx;
+  Options& o = ctx.o;
+  std::string out = o.out.string(), json, script = o.plot_script.string();
+  po::options_description desc("bench_surface: reproduces chapter 5 of the thesis (surfaces)\nOptions");
+  desc.add_options()("help,h", "print this help")                                                 //
+      ("list", "list the cases and exit")                                                         //
+      ("case", po::value(&o.cases)->composing(), "run this case (repeatable; default: every case)")  //
+      ("out", po::value(&out)->default_value(out), "directory for CSV, PNG and JSON files")       //
+      ("json", po::value(&json), "JSON report (default OUT/surface.json)")                        //
+      ("grid", po::value(&o.grid)->default_value(o.grid), "level-set grid points per axis (appendixF)")  //
+      ("no-plot", "do not run the plotting script")                                               //
+      ("plot-script", po::value(&script)->default_value(script), "path of plot_surface.py");
+  try {
+    po::variables_map vm;
+    po::store(po::parse_command_line(argc, argv, desc), vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+      std::cout << desc << '\n';
+      return 0;
+    }
+    if (vm.count("list")) {
+      for (const auto& c : registry()) std::printf("%-12s %s\n", c.name.c_str(), c.description.c_str());
+      return 0;
+    }
+    for (const auto& name : o.cases) {
+      const auto& r = registry();
+      if (std::none_of(r.begin(), r.end(), [&](const SurfaceCase& c) { return c.name == name; }))
+        throw std::invalid_argument("unknown case '" + name + "' (see --list)");
+    }
+    if (o.grid < 11) throw std::invalid_argument("--grid must be at least 11");
+    o.out = out;
+    o.plot_script = script;
+    o.plot = !vm.count("no-plot");
+    if (!json.empty()) o.json = json;
+    return run(ctx);
+  } catch (const std::exception& e) {
+    std::cerr << "bench_surface: error: " << e.what() << '\n';
+    return 2;
+  }
+}
