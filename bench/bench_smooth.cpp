@@ -60,12 +60,13 @@
 /// Tables 4.4, 4.5 (--case 4.4). A cube of side 5 (no cavity) meshed with a
 /// size of 0.1 inside a ball of diameter 1 at its centre and 2 on the
 /// boundary (src/meshing/sized_cube.hpp: 7425 tetrahedra; thesis: 7394
-/// tetrahedra, 79429 nodes "at p = 5"), elevated to p = 5 (--p44; the
-/// thesis's node count fits degree 4: a tetrahedral mesh has about p^3 / 6
-/// nodes per element, 20.9 at p = 5 (ours: 155556 nodes), 10.7 at p = 4
-/// (ours: 79739, thesis 79429 / 7394 = 10.7); straight-sided: every boundary face is
-/// planar), optimized once against the equilateral (regular) tetrahedron and
-/// once against the straight-sided mesh (IdealKind). Table 4.4: quality of
+/// tetrahedra and 79429 nodes "at p = 5"), elevated to p = 5 (--p44). The
+/// thesis's node count fits degree 4, not 5: a tetrahedral mesh has about
+/// p^3 / 6 nodes per element, and ours has 155556 nodes at p = 5 and 79739
+/// at p = 4 (V + 3E + 3F + T). The elevated mesh is straight-sided (every
+/// boundary face is planar); it is optimized once against the equilateral
+/// (regular) tetrahedron and once against the straight-sided mesh
+/// (IdealKind), at most --max-iterations-44 iterations each. Table 4.4: quality of
 /// each mesh against the ideal it was optimized for (the initial mesh against
 /// the straight-sided one, as the thesis's 1.00 row implies; also shown
 /// against the equilateral one); table 4.5: statistics of the scaled
@@ -76,6 +77,14 @@
 ///
 /// All statistics use the shape measure and the default quadrature
 /// (DefaultExactness); so does the optimizer.
+///
+/// Observed (2026-11, Gmsh 4.8.4, loaded 2-core machine): the non-linear
+/// method does not untangle the moved cavity within the default 50
+/// matrix-free Newton iterations (208 -> 206 inverted, 230 s; line-search
+/// steps of 1e-3 to 1e-2), nor with Gauss-Seidel (204 after 37 sweeps) or
+/// with p-continuation (see Options::pcont); so table 4.2's first claim
+/// fails and the harness exits 1. The exact linear minimizer leaves 230
+/// inverted. Tables 4.4, 4.5 reproduce the thesis's conclusions.
 ///
 /// Output: the tables beside the thesis's numbers on stdout; smooth.csv, VTU
 /// files (point data: point-wise quality, the minimum over the elements
@@ -157,9 +166,15 @@ constexpr Row thesis_45_straight{0.990, 1.000, 0.990, 0.001, 0};
 constexpr double thesis_max_rv_equilateral = 2.013, thesis_max_rv_straight = 2e-3;
 constexpr int thesis_mu_one_equilateral = 0, thesis_mu_one_straight = 7387;
 
-Json row_json(const Row& r) {
+/// A thesis row as JSON: quality rows with the report's keys (min_q, ...),
+/// scaled-Jacobian rows with plain ones (min, max, mean, std).
+Json row_json(const Row& r, bool quality = true) {
   Json j = Json::object();
-  j.set("min_q", r.min).set("max_q", r.max).set("mean_q", r.mean).set("std_q", r.std_dev).set("inverted", r.inverted);
+  j.set(quality ? "min_q" : "min", r.min)
+      .set(quality ? "max_q" : "max", r.max)
+      .set(quality ? "mean_q" : "mean", r.mean)
+      .set(quality ? "std_q" : "std", r.std_dev)
+      .set("inverted", r.inverted);
   return j;
 }
 
@@ -543,12 +558,12 @@ const Stage* find(const std::vector<Stage>& stages, const std::string& table, co
   return nullptr;
 }
 
-/// The thesis's claims; prints each and returns whether all hold.
-bool check_claims(const std::vector<Stage>& stages) {
-  bool ok = true;
+/// The thesis's claims that the run covers; prints each.
+std::vector<hom::io::Check> check_claims(const std::vector<Stage>& stages) {
+  std::vector<hom::io::Check> checks;
   auto claim = [&](bool holds, const std::string& text) {
     std::printf("  [%s] %s\n", holds ? "ok" : "FAILED", text.c_str());
-    ok = ok && holds;
+    checks.push_back({text, holds});
   };
   std::printf("\nclaims:\n");
   if (const Stage* n = find(stages, "4.2", "non-linear")) claim(n->quality.inverted == 0, "table 4.2: the non-linear method gives a valid mesh");
@@ -560,10 +575,11 @@ bool check_claims(const std::vector<Stage>& stages) {
     claim(st->mu_one > eq->mu_one, "table 4.5: the straight-sided ideal keeps more elements straight (mu = 1)");
     claim(st->max_rv < eq->max_rv, "section 4.3.3: the straight-sided ideal gives a smaller maximum r_v");
   }
-  return ok;
+  return checks;
 }
 
-void write_outputs(const Options& o, const std::vector<Stage>& stages, int threads) {
+void write_outputs(const Options& o, const std::vector<Stage>& stages, const std::vector<hom::io::Check>& checks,
+                   int threads) {
   const std::string csv_path = (o.out / "smooth.csv").string();
   std::ostringstream csv;
   csv << "table,stage,ideal,elements,nodes,min_q,max_q,mean_q,std_q,inverted,min_sj,max_sj,mean_sj,std_sj,max_rv,"
@@ -614,7 +630,7 @@ void write_outputs(const Options& o, const std::vector<Stage>& stages, int threa
     if (s.thesis) {
       t = row_json(*s.thesis);
       t.set("elements", s.table == "4.2" ? 1441 : 7394).set("nodes", s.table == "4.2" ? 32382 : 79429);
-      if (s.thesis_scaled_jacobian) t.set("scaled_jacobian", row_json(*s.thesis_scaled_jacobian));
+      if (s.thesis_scaled_jacobian) t.set("scaled_jacobian", row_json(*s.thesis_scaled_jacobian, false));
       if (std::isfinite(s.thesis_max_rv)) t.set("max_relative_volume_error", s.thesis_max_rv);
       if (s.thesis_mu_one >= 0) t.set("mu_one", s.thesis_mu_one);
     }
@@ -624,7 +640,7 @@ void write_outputs(const Options& o, const std::vector<Stage>& stages, int threa
   const std::string text = csv.str();
   hom::io::write_atomically(csv_path, [&](std::FILE* f) { hom::io::write_all(f, csv_path, text.data(), text.size()); });
   const fs::path json_path = o.json.value_or(o.out / "smooth.json");
-  hom::io::write_report(json_path.string(), "bench_smooth", HOM_VERSION, std::move(cases));
+  hom::io::write_report(json_path.string(), "bench_smooth", HOM_VERSION, std::move(cases), checks);
   std::printf("\nwrote %s, %s%s\n", csv_path.c_str(), json_path.c_str(), o.vtu ? " and VTU files" : "");
 }
 
@@ -724,8 +740,9 @@ int main(int argc, char** argv) {
       stages.insert(stages.end(), s.begin(), s.end());
     }
     print_tables(stages);
-    write_outputs(o, stages, threads);
-    const bool ok = check_claims(stages);
+    const auto checks = check_claims(stages);
+    write_outputs(o, stages, checks, threads);
+    const bool ok = std::all_of(checks.begin(), checks.end(), [](const hom::io::Check& c) { return c.holds; });
     std::printf("total %.1f s, peak RSS %.0f MB\n", seconds_since(t0), peak_rss_mb());
     return ok ? 0 : 1;
   } catch (const std::exception& e) {

@@ -15,7 +15,7 @@
 /// thesis states the two sizes, not the law between them; the exponent sets
 /// how fast the size grows. With Gmsh 4.8.4 and the defaults (grading 1.33)
 /// the mesh has 7425 tetrahedra and 1256 vertices against the thesis's 7394
-/// tetrahedra (linear grading, 1.0, gives 4987).
+/// tetrahedra (linear grading, 1.0, gives about 5000).
 ///
 /// Meshing is deterministic as in cube_with_cavity.hpp: one thread, fixed
 /// random seed, fixed algorithms, no user configuration files. The six faces

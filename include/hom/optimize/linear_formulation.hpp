@@ -78,7 +78,9 @@ enum class LinearSolveKind {
 struct LinearFormulationOptions {
   LinearSolveKind solver = LinearSolveKind::direct;
   int max_sweeps = 1000;              ///< gauss_seidel: sweep limit
-  double objective_tolerance = 1e-6;  ///< gauss_seidel: stop when a sweep lowers f by <= this * f
+  /// gauss_seidel: stop when a sweep lowers f by <= this * f (0: when f stops
+  /// decreasing, i.e. at round-off)
+  double objective_tolerance = 1e-6;
 };
 
 struct LinearFormulationResult {
