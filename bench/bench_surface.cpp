@@ -17,7 +17,27 @@
 ///               (their maxima at the same grid point), q <= 1; the edge and
 ///               face regions are bounded (inside the window).
 ///
-/// Adding a case (section 5.5.1.1 consistency, table 5.2, robustness): write
+///   consistency section 5.5.1.1 (figure 5.7, table 5.1): a tangled degree-3
+///               planar mesh with a curved boundary (the ring of appendices C
+///               and D, bench/ring_mesh.hpp; the thesis's motorbike brake is
+///               not available) optimized by the planar optimizer (eq 4.11)
+///               and by the surface optimizer on the plane z = 0 (eq 5.22);
+///               E of eq 5.28 between the two (thesis: 1.3e-4), quality
+///               statistics of both. Claims: E <= 1e-3, both valid, same
+///               statistics (to 0.01).
+///   table52     section 5.5.1.2 (table 5.2, figure 5.8): the structured
+///               degree-3 mesh of [-1, 1]^2 (128 triangles, 625 nodes, ideal
+///               the isosceles right triangle of the parametric mesh) mapped
+///               onto Sigma_1 (plane) and Sigma_2 (z = sin(pi x) cos(pi y))
+///               through phi^1 and phi^2 (thesis_parameterizations.hpp) and
+///               optimized in each parameterization; quality statistics
+///               beside the thesis's, E (eq 5.28) between the two optimized
+///               meshes of each surface (thesis 1.01e-4 and 5.7e-4), VTU of
+///               every mesh, table52.png (figure 5.8's layout). Claims: on
+///               Sigma_1 both optimize to q = 1.00 and E <= 1e-3; on Sigma_2
+///               both end valid with a higher minimum quality, and E <= 1e-3.
+///
+/// Adding a case (robustness, section 5.5.1.3): write
 /// `void run_xxx(Context&)` that appends JSON cases to ctx.cases, claim checks
 /// to ctx.checks and files under ctx.o.out, and add a line to `registry()`.
 ///
@@ -74,6 +94,17 @@
 #include "hom/quality/ideal.hpp"
 #include "hom/quality/tabulation.hpp"
 #include "hom/surface/surface_element_quality.hpp"
+#include "hom/geometry/plane.hpp"
+#include "hom/geometry/thesis_parameterizations.hpp"
+#include "hom/io/vtu.hpp"
+#include "hom/mesh/elevate.hpp"
+#include "hom/mesh/structured.hpp"
+#include "hom/optimize/mesh_problem.hpp"
+#include "hom/optimize/newton.hpp"
+#include "hom/quality/statistics.hpp"
+#include "hom/surface/optimize_surface.hpp"
+#include "hom/surface/surface_problem.hpp"
+#include "ring_mesh.hpp"
 
 #ifndef HOM_VERSION
 #define HOM_VERSION "unknown"
@@ -488,6 +519,343 @@ void run_appendix_f(Context& ctx) {
 }
 
 // --------------------------------------------------------------------------
+// Sections 5.5.1.1 and 5.5.1.2: the surface optimizer.
+
+/// Tight stopping rules: the minima compared by E are reached to high
+/// accuracy (the quality-stagnation rule would stop the degenerate, quartic
+/// minimum of a mesh that can reach q = 1 too early).
+SolverOptions tight_solver_options() {
+  SolverOptions o;
+  o.max_iterations = 300;
+  o.gradient_tolerance = 1e-10;
+  o.objective_tolerance = 1e-12;
+  o.stagnation_window = 0;
+  return o;
+}
+
+/// E of eq 5.28: max over the free nodes of |x1 - x2| / L, L the shortest
+/// straight-sided edge of mesh 1.
+template <ElementFamily F>
+double relative_distance(const Eigen::Matrix3Xd& X1, const Eigen::Matrix3Xd& X2, const std::vector<bool>& free,
+                         const Eigen::MatrixXi& elements) {
+  double L = std::numeric_limits<double>::infinity();
+  for (Eigen::Index e = 0; e < elements.cols(); ++e)
+    for (const auto& edge : F::edges()) L = std::min(L, (X1.col(elements(edge[0], e)) - X1.col(elements(edge[1], e))).norm());
+  double E = 0.0;
+  for (Eigen::Index i = 0; i < X1.cols(); ++i)
+    if (free[i]) E = std::max(E, (X1.col(i) - X2.col(i)).norm() / L);
+  return E;
+}
+
+Json statistics_json(const Statistics& s) {
+  Json j = Json::object();
+  j.set("min_q", s.min).set("max_q", s.max).set("mean_q", s.mean).set("std_q", s.std_dev).set("inverted", s.inverted);
+  return j;
+}
+
+std::string statistics_row(const Statistics& s) {
+  char b[128];
+  std::snprintf(b, sizeof b, "%5s %5s %5s %5s %4d", fmt(s.min).c_str(), fmt(s.max).c_str(), fmt(s.mean).c_str(),
+                fmt(s.std_dev).c_str(), s.inverted);
+  return b;
+}
+
+void run_consistency(Context& ctx) {
+  using F = Simplex<2>;
+  using N = WarpBlend;
+  const auto t0 = Clock::now();
+  constexpr int p = 3;
+  const auto start = bench::curved_ring(bench::ring_triangles(bench::thesis_ring_layout()), p, 1.0, 2.0);
+  const auto rule = quadrature_for<F, Quadrature>(p);
+  const auto& tab = tabulation<F, N>(p, rule);
+  const auto initial = mesh_quality(start, ShapeMeasure{}, IdealKind::straight_sided, rule).quality_statistics();
+
+  // Planar optimizer (chapter 4).
+  Mesh<F, N> planar_mesh = start;
+  const auto tp = Clock::now();
+  std::vector<IdealAtPoints<2>> ideals(start.num_elements());
+  for (int e = 0; e < start.num_elements(); ++e) ideals[e] = ideal_at_points<F>(tab, start.ideal_vertices(e));
+  OptimizationProblem<F> planar(tab, start.nodes(), start.elements(), free_node_mask(start), ideals);
+  const SolverResult rp = NewtonSolver{}.solve(planar, tight_solver_options());
+  const double time_planar = seconds_since(tp);
+  planar_mesh.nodes() = planar.coordinates();
+  const auto stats_planar = mesh_quality(planar_mesh, ShapeMeasure{}, IdealKind::straight_sided, rule).quality_statistics();
+
+  // Surface optimizer on z = 0 with the identity parameterization.
+  Eigen::Matrix3Xd X3 = Eigen::Matrix3Xd::Zero(3, start.num_nodes()), I3 = X3;
+  X3.topRows<2>() = start.nodes();
+  I3.topRows<2>() = start.ideal_coordinates();
+  Mesh<F, N, 3> surface_mesh(p, X3, start.elements());
+  surface_mesh.node_classes() = start.node_classes();
+  surface_mesh.set_ideal_coordinates(I3);
+  const Plane plane(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX());
+  Eigen::Matrix2Xd uv = start.nodes();
+  const auto ts = Clock::now();
+  SurfaceOptimizationProblem<F, ShapeMeasure, Plane> sp(tab, plane, uv, start.elements(),
+                                                        surface_free_node_mask(surface_mesh),
+                                                        surface_ideals(surface_mesh, IdealKind::straight_sided));
+  const SolverResult rs = NewtonSolver{}.solve(sp, tight_solver_options());
+  const double time_surface = seconds_since(ts);
+  surface_mesh.nodes() = sp.physical_coordinates();
+  const auto stats_surface =
+      surface_mesh_quality(surface_mesh, ShapeMeasure{}, IdealKind::straight_sided, rule).quality_statistics();
+
+  Eigen::Matrix3Xd X1 = Eigen::Matrix3Xd::Zero(3, start.num_nodes());
+  X1.topRows<2>() = planar.coordinates();
+  const double E = relative_distance<F>(X1, surface_mesh.nodes(), free_node_mask(start), start.elements());
+
+  std::printf("Section 5.5.1.1 (consistency): degree-3 ring, %d triangles, %d nodes, curved inner circle\n",
+              start.num_elements(), start.num_nodes());
+  std::printf("(the thesis's mesh is a motorbike brake, 643 triangles; quadrature: %s)\n",
+              std::string(Quadrature::name).c_str());
+  std::printf("  mesh                 Min   Max   Mean  SD   Tang.   iterations  time\n");
+  std::printf("  initial              %s\n", statistics_row(initial).c_str());
+  std::printf("  planar optimizer     %s   %10d  %.2f s\n", statistics_row(stats_planar).c_str(), rp.iterations,
+              time_planar);
+  std::printf("  surface optimizer    %s   %10d  %.2f s\n", statistics_row(stats_surface).c_str(), rs.iterations,
+              time_surface);
+  std::printf("  E (eq 5.28) = %.2e   (thesis: 1.3e-4)\n\n", E);
+
+  ctx.checks.expect(initial.inverted > 0, "consistency: the initial ring is tangled");
+  ctx.checks.expect(stats_planar.inverted == 0 && stats_surface.inverted == 0,
+                    "consistency: both optimized meshes are valid");
+  ctx.checks.expect(E <= 1e-3, "consistency: E (eq 5.28) = " + fmt(E, 8) + " <= 1e-3");
+  ctx.checks.expect(std::abs(stats_planar.min - stats_surface.min) <= 0.01 &&
+                        std::abs(stats_planar.mean - stats_surface.mean) <= 0.01,
+                    "consistency: the planar and surface meshes have the same quality statistics");
+  const double time = seconds_since(t0);
+  auto add = [&](const std::string& stage, const Statistics& s, const SolverResult* r, double t) {
+    Json c = Json::object();
+    c.set("name", "consistency_ring_" + stage)
+        .set("figure", "5.7")
+        .set("family", std::string(F::name))
+        .set("p", p)
+        .set("elements", start.num_elements())
+        .set("nodes", start.num_nodes())
+        .set("stage", stage)
+        .set("measure", "shape")
+        .set("ideal", "straight-sided")
+        .set("quadrature", std::string(Quadrature::name))
+        .set("min_q", s.min)
+        .set("max_q", s.max)
+        .set("mean_q", s.mean)
+        .set("std_q", s.std_dev)
+        .set("inverted", s.inverted)
+        .set("time_s", t)
+        .set("peak_rss_mb", hom::bench::peak_rss_mb());
+    if (r) c.set("iterations", r->iterations).set("converged", r->converged);
+    if (stage != "initial") c.set("E", E).set("thesis", Json::object().set("E", 1.3e-4));
+    ctx.cases.push_back(std::move(c));
+  };
+  add("initial", initial, nullptr, 0.0);
+  add("optimized_planar", stats_planar, &rp, time_planar);
+  add("optimized_surface", stats_surface, &rs, time_surface);
+  (void)time;
+}
+
+/// One mesh of table 5.2: statistics, nodes, parameters.
+struct Table52Mesh {
+  std::string surface, label, figure;
+  int k = 1;
+  bool optimized = false;
+  Statistics stats;
+  Statistics thesis;
+  Eigen::Matrix2Xd uv;
+  Eigen::Matrix3Xd x;
+  std::vector<double> quality;
+  int iterations = 0;
+  double time_s = 0.0;
+  bool converged = false;
+};
+
+Statistics thesis_row(double mn, double mx, double mean, double sd) {
+  Statistics s;
+  s.min = mn;
+  s.max = mx;
+  s.mean = mean;
+  s.std_dev = sd;
+  s.inverted = 0;
+  return s;
+}
+
+/// Element qualities (defs. 5.1-5.2) of the mesh with nodes UV on g, oriented
+/// by the optimizer's normals (interpolated_nodal_normals).
+template <class G>
+std::vector<ElementQuality> table52_qualities(const Tabulation<Simplex<2>>& tab, const G& g, const Eigen::Matrix2Xd& uv,
+                                              const Eigen::MatrixXi& elements,
+                                              const std::vector<SurfaceIdealVertices<Simplex<2>>>& ideals) {
+  std::vector<ElementQuality> q(elements.cols());
+  for (Eigen::Index e = 0; e < elements.cols(); ++e) {
+    UVs U(2, elements.rows());
+    for (Eigen::Index i = 0; i < elements.rows(); ++i) U.col(i) = uv.col(elements(i, e));
+    q[e] = surface_element_quality<Simplex<2>>(tab, surface_points(g, U), ideals[e],
+                                               interpolated_nodal_normals(tab, g, U), ShapeMeasure{});
+  }
+  return q;
+}
+
+void write_table52_csv(const fs::path& path, const std::vector<Table52Mesh>& meshes, const Eigen::MatrixXi& elements,
+                       const Eigen::MatrixXd& boundary_basis) {
+  std::ostringstream os;
+  os.precision(9);
+  os << "surface,k,stage,element,quality,index,u,v,x,y,z\n";
+  for (const auto& m : meshes)
+    for (Eigen::Index e = 0; e < elements.cols(); ++e) {
+      Eigen::Matrix2Xd U(2, elements.rows());
+      Eigen::Matrix3Xd X(3, elements.rows());
+      for (Eigen::Index i = 0; i < elements.rows(); ++i) {
+        U.col(i) = m.uv.col(elements(i, e));
+        X.col(i) = m.x.col(elements(i, e));
+      }
+      const Eigen::Matrix2Xd ub = U * boundary_basis.transpose();
+      const Eigen::Matrix3Xd xb = X * boundary_basis.transpose();
+      for (Eigen::Index k = 0; k < ub.cols(); ++k)
+        os << m.surface << ',' << m.k << ',' << (m.optimized ? "optimized" : "initial") << ',' << e << ','
+           << m.quality[e] << ',' << k << ',' << ub(0, k) << ',' << ub(1, k) << ',' << xb(0, k) << ',' << xb(1, k)
+           << ',' << xb(2, k) << '\n';
+    }
+  write_text(path, os.str());
+}
+
+void run_table52(Context& ctx) {
+  using F = Simplex<2>;
+  using N = WarpBlend;
+  constexpr int p = 3, cells = 8;
+  const auto param = elevate(
+      structured_mesh<F, N>({cells, cells}, Eigen::Vector2d::Constant(-1.0), Eigen::Vector2d::Constant(1.0)), p);
+  const auto rule = quadrature_for<F, Quadrature>(p);
+  const auto& tab = tabulation<F, N>(p, rule);
+  std::vector<SurfaceIdealVertices<F>> ideals(param.num_elements());
+  for (int e = 0; e < param.num_elements(); ++e) ideals[e] = embed_ideal<F>(param.ideal_vertices(e));
+  const auto free = free_node_mask(param);
+  // Thesis table 5.2, rows in the order of figure 5.8 (b, d, f, h, j, l, n, p).
+  const Statistics thesis[2][2][2] = {
+      {{thesis_row(0.29, 0.96, 0.67, 0.18), thesis_row(1.00, 1.00, 1.00, 0.00)},
+       {thesis_row(0.43, 1.00, 0.65, 0.16), thesis_row(1.00, 1.00, 1.00, 0.00)}},
+      {{thesis_row(0.16, 0.93, 0.57, 0.22), thesis_row(0.91, 1.00, 0.97, 0.02)},
+       {thesis_row(0.34, 0.96, 0.63, 0.16), thesis_row(0.91, 1.00, 0.97, 0.02)}}};
+  const char* figures[2][2][2] = {{{"5.8(b)", "5.8(d)"}, {"5.8(f)", "5.8(h)"}},
+                                  {{"5.8(j)", "5.8(l)"}, {"5.8(n)", "5.8(p)"}}};
+  const double thesis_E[2] = {1.01e-4, 5.7e-4};
+
+  std::vector<Table52Mesh> meshes;
+  double E[2] = {0.0, 0.0};
+  for (int s = 0; s < 2; ++s) {
+    Eigen::Matrix3Xd optimized[2];
+    for (int k = 1; k <= 2; ++k) {
+      const ParametricSurface g = s == 0 ? thesis_sigma1(k) : thesis_sigma2(k);
+      const std::string surface = s == 0 ? "Sigma1" : "Sigma2";
+      const std::string label = "phi^" + std::to_string(k) + "_" + surface;
+      const auto t0 = Clock::now();
+      SurfaceOptimizationProblem<F, ShapeMeasure, ParametricSurface> problem(tab, g, param.nodes(), param.elements(),
+                                                                            free, ideals);
+      Table52Mesh m0;
+      m0.surface = surface;
+      m0.label = label;
+      m0.k = k;
+      m0.figure = figures[s][k - 1][0];
+      m0.uv = param.nodes();
+      m0.x = problem.physical_coordinates();
+      const SolverResult r = NewtonSolver{}.solve(problem, tight_solver_options());
+      Table52Mesh m1 = m0;
+      m1.optimized = true;
+      m1.figure = figures[s][k - 1][1];
+      m1.uv = problem.coordinates();
+      m1.x = problem.physical_coordinates();
+      m1.iterations = r.iterations;
+      m1.converged = r.converged;
+      m1.time_s = seconds_since(t0);
+      for (Table52Mesh* m : {&m0, &m1}) {
+        const auto q = table52_qualities(tab, g, m->uv, param.elements(), ideals);
+        MeshQuality mq;
+        mq.elements = q;
+        m->stats = mq.quality_statistics();
+        m->quality = mq.qualities();
+        m->thesis = thesis[s][k - 1][m->optimized ? 1 : 0];
+        // VTU of the physical mesh colored by element quality.
+        Mesh<F, N, 3> vm(p, m->x, param.elements());
+        hom::io::write_vtu((ctx.o.out / ("table52_" + surface + "_phi" + std::to_string(k) + "_" +
+                                (m->optimized ? "optimized" : "initial") + ".vtu"))
+                      .string(),
+                  vm, {}, {{"quality", 1, m->quality}});
+      }
+      optimized[k - 1] = m1.x;
+      meshes.push_back(m0);
+      meshes.push_back(m1);
+    }
+    E[s] = relative_distance<F>(optimized[0], optimized[1], free, param.elements());
+  }
+
+  // Element boundary samples for the figure.
+  std::vector<F::Point> pts;
+  for (int v = 0; v < 3; ++v)
+    for (int t = 0; t < 12; ++t) {
+      const double a = t / 12.0;
+      pts.push_back((1 - a) * F::vertex(v) + a * F::vertex((v + 1) % 3));
+    }
+  write_table52_csv(ctx.o.out / "table52_meshes.csv", meshes, param.elements(),
+                    lagrange_basis<F, N>(p).values(pts));
+
+  std::printf("Section 5.5.1.2 (table 5.2, figure 5.8): degree-3 structured mesh of [-1, 1]^2, %d triangles, %d nodes\n",
+              param.num_elements(), param.num_nodes());
+  std::printf("(ideal: the isosceles right triangle; shape quality; %s; normals: interpolated nodal normals)\n",
+              std::string(Quadrature::name).c_str());
+  std::printf("  parameterization  figure   hom: Min   Max   Mean  SD   Tang.   thesis: Min   Max   Mean  SD   Tang.  "
+              " iterations  time\n");
+  for (const auto& m : meshes) {
+    std::printf("  %-16s  %-7s  %s           %s", m.label.c_str(), m.figure.c_str(), statistics_row(m.stats).c_str(),
+                statistics_row(m.thesis).c_str());
+    if (m.optimized) std::printf("   %5d%s  %6.2f s", m.iterations, m.converged ? " " : "*", m.time_s);
+    std::printf("\n");
+  }
+  std::printf("  (* the solver stopped without converging)\n");
+  for (int s = 0; s < 2; ++s)
+    std::printf("  E (eq 5.28) between phi^1 and phi^2 on Sigma_%d: %.2e   (thesis: %.2e)\n", s + 1, E[s], thesis_E[s]);
+  std::printf("\n");
+
+  for (const auto& m : meshes) {
+    Json c = Json::object();
+    c.set("name", "table52_" + m.label + (m.optimized ? "_optimized" : "_initial"))
+        .set("figure", m.figure)
+        .set("surface", m.surface)
+        .set("parameterization", m.k)
+        .set("family", std::string(F::name))
+        .set("p", p)
+        .set("elements", param.num_elements())
+        .set("nodes", param.num_nodes())
+        .set("stage", m.optimized ? "optimized" : "initial")
+        .set("measure", "shape")
+        .set("ideal", "isosceles right triangle")
+        .set("quadrature", std::string(Quadrature::name))
+        .set("min_q", m.stats.min)
+        .set("max_q", m.stats.max)
+        .set("mean_q", m.stats.mean)
+        .set("std_q", m.stats.std_dev)
+        .set("inverted", m.stats.inverted)
+        .set("thesis", statistics_json(m.thesis))
+        .set("peak_rss_mb", hom::bench::peak_rss_mb());
+    if (m.optimized) {
+      c.set("iterations", m.iterations).set("converged", m.converged).set("time_s", m.time_s);
+      c.set("E_between_parameterizations", E[m.surface == "Sigma1" ? 0 : 1])
+          .set("thesis_E", thesis_E[m.surface == "Sigma1" ? 0 : 1]);
+    }
+    ctx.cases.push_back(std::move(c));
+  }
+  for (const auto& m : meshes) {
+    if (!m.optimized) continue;
+    ctx.checks.expect(m.stats.inverted == 0, "table52: " + m.label + " optimized mesh is valid");
+    if (m.surface == "Sigma1")
+      ctx.checks.expect(m.stats.min >= 0.995, "table52: " + m.label + " optimizes to q = 1.00 (min " + fmt(m.stats.min, 4) + ")");
+  }
+  for (std::size_t i = 0; i + 1 < meshes.size(); i += 2)
+    ctx.checks.expect(meshes[i + 1].stats.min > meshes[i].stats.min,
+                      "table52: " + meshes[i].label + " minimum quality increases");
+  for (int s = 0; s < 2; ++s)
+    ctx.checks.expect(E[s] <= 1e-3, "table52: E between phi^1 and phi^2 on Sigma_" + std::to_string(s + 1) + " = " +
+                                        fmt(E[s], 6) + " <= 1e-3 (proposition 5.2)");
+}
+
+// --------------------------------------------------------------------------
 // Registry.
 
 struct SurfaceCase {
@@ -500,6 +868,10 @@ const std::vector<SurfaceCase>& registry() {
   static const std::vector<SurfaceCase> r = {
       {"appendixF", "appendix F (figs F.1-F.4): shape/Oddy level sets, degree-3 tri and quad, cylinder and saddle",
        run_appendix_f},
+      {"consistency", "section 5.5.1.1: planar vs surface optimizer on a tangled degree-3 ring (E, eq 5.28)",
+       run_consistency},
+      {"table52", "section 5.5.1.2 (table 5.2, fig. 5.8): Sigma_1, Sigma_2 through phi^1, phi^2, optimized",
+       run_table52},
   };
   return r;
 }

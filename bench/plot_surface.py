@@ -12,6 +12,12 @@ Appendix F (appendixF_levelsets.csv, appendixF_elements.csv):
   appendixF_<surface>_<family>_uv.png  the same in the parameter plane (u, v), with the
                                        element's parameter nodes and the free node
 
+Table 5.2 / figure 5.8 (table52_meshes.csv):
+  table52.png                          rows Sigma_1 / Sigma_2, columns phi^1 initial /
+                                       optimized, phi^2 initial / optimized; each panel the
+                                       parametric mesh (left) and the physical mesh (right),
+                                       elements colored by their shape quality
+
 Needs numpy and matplotlib only (Debian's python3-matplotlib).
 """
 
@@ -166,9 +172,69 @@ def plot_appendix_f(directory):
             print("wrote", out, "and", out_uv)
 
 
+def plot_table52(directory):
+    path = os.path.join(directory, "table52_meshes.csv")
+    if not os.path.exists(path):
+        return
+    from matplotlib.collections import PolyCollection
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    data = read_csv(path)
+    norm = matplotlib.colors.Normalize(0.0, 1.0)
+    fig = plt.figure(figsize=(20, 10.5))
+    letters = iter("abcdefghijklmnop")
+    for row, surface in enumerate(["Sigma1", "Sigma2"]):
+        col = 0
+        for k in (1, 2):
+            for stage in ("initial", "optimized"):
+                d = select(data, surface=surface, k=float(k), stage=stage)
+                if len(d["u"]) == 0:
+                    continue
+                elements = np.unique(d["element"])
+                polys_uv, polys_x, colors = [], [], []
+                for e in elements:
+                    m = d["element"] == e
+                    order = np.argsort(d["index"][m])
+                    polys_uv.append(np.column_stack([d["u"][m][order], d["v"][m][order]]))
+                    polys_x.append(np.column_stack([d["x"][m][order], d["y"][m][order], d["z"][m][order]]))
+                    colors.append(CMAP(norm(d["quality"][m][0])))
+                ax = fig.add_subplot(2, 8, 8 * row + col + 1)
+                ax.add_collection(PolyCollection(polys_uv, facecolors=colors, edgecolors="k", linewidths=0.3))
+                ax.set_xlim(-1.05, 1.05)
+                ax.set_ylim(-1.05, 1.05)
+                ax.set_aspect("equal")
+                ax.set_title("(%s) %s, phi^%d, %s\nparametric" % (next(letters), surface, k, stage), fontsize=8)
+                ax.tick_params(labelsize=6)
+                if surface == "Sigma1":
+                    ax2 = fig.add_subplot(2, 8, 8 * row + col + 2)
+                    ax2.add_collection(PolyCollection([p[:, :2] for p in polys_x], facecolors=colors, edgecolors="k",
+                                                      linewidths=0.3))
+                    ax2.set_xlim(-1.05, 1.05)
+                    ax2.set_ylim(-1.05, 1.05)
+                    ax2.set_aspect("equal")
+                else:
+                    ax2 = fig.add_subplot(2, 8, 8 * row + col + 2, projection="3d")
+                    ax2.add_collection3d(Poly3DCollection(polys_x, facecolors=colors, edgecolors="k", linewidths=0.2))
+                    ax2.set_xlim(-1, 1)
+                    ax2.set_ylim(-1, 1)
+                    ax2.set_zlim(-1, 1)
+                    ax2.view_init(elev=35, azim=-60)
+                ax2.set_title("(%s) physical" % next(letters), fontsize=8)
+                ax2.tick_params(labelsize=6)
+                col += 2
+    sm = plt.cm.ScalarMappable(norm=norm, cmap=CMAP)
+    fig.colorbar(sm, ax=fig.axes, shrink=0.5, label="element shape quality")
+    fig.suptitle("figure 5.8 analogue: degree-3 meshes on Sigma_1 and Sigma_2 through phi^1 and phi^2, "
+                 "initial and optimized")
+    out = os.path.join(directory, "table52.png")
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    print("wrote", out)
+
+
 def main():
     directory = sys.argv[1] if len(sys.argv) > 1 else "results/surface"
     plot_appendix_f(directory)
+    plot_table52(directory)
 
 
 if __name__ == "__main__":

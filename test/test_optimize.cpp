@@ -440,3 +440,89 @@ TEST_CASE("p-continuation does nothing when the linear sub-mesh is valid") {
   CHECK(r.inverted() == 0);
   CHECK(r.min_quality() == doctest::Approx(1.0).epsilon(1e-9));
 }
+
+TEST_CASE("the whole-mesh scope regularizes every element while one is invalid, and none once all are valid") {
+  auto mesh = box_mesh<Simplex<2>>(4, 2);
+  const auto valid = mesh;
+  perturb(mesh, 0.3, 7);
+  auto problem = make_problem(mesh, make_ideal_mesh(mesh, IdealKind::straight_sided));
+  const MeshState tangled = problem.status(problem.coordinates());
+  REQUIRE(tangled.inverted > 0);
+  REQUIRE(tangled.inverted < problem.num_elements());
+  problem.set_regularization({thesis_regularization_alpha, RegularizationScope::invalid_elements});
+  CHECK(problem.update_regularization(tangled) == tangled.inverted);
+  for (int e = 0; e < problem.num_elements(); ++e) CHECK((problem.deltas()[e] > 0.0) == !tangled.valid[e]);
+  problem.set_regularization({thesis_regularization_alpha, RegularizationScope::whole_mesh});
+  CHECK(problem.update_regularization(tangled) == problem.num_elements());
+  for (double d : problem.deltas()) CHECK(d > 0.0);
+  const MeshState all_valid = problem.status(valid.nodes());
+  REQUIRE(all_valid.all_valid());
+  CHECK(problem.update_regularization(all_valid) == 0);
+  for (double d : problem.deltas()) CHECK(d == 0.0);
+}
+
+TEST_CASE("the vertex problem is the degree-1 mesh of the element vertices") {
+  auto mesh = box_mesh<Simplex<3>>(2, 3);
+  std::vector<int> vertex_nodes;
+  const auto ideal = make_ideal_mesh(mesh, IdealKind::straight_sided);
+  const auto vertices = make_vertex_problem(mesh, ideal, vertex_nodes);
+  CHECK(vertices.num_nodes() == 27);  // (2 + 1)^3 grid points
+  CHECK(vertices.num_elements() == mesh.num_elements());
+  CHECK(vertices.num_free_nodes() == 1);  // the centre of the box
+  // Reference: the same linear mesh built directly, as its own problem.
+  const auto linear = structured_mesh<Simplex<3>, WarpBlend>({2, 2, 2});
+  auto reference = make_problem(linear, make_ideal_mesh(linear, IdealKind::straight_sided));
+  CHECK(vertices.value(vertices.coordinates()) == doctest::Approx(reference.value(reference.coordinates())));
+  for (std::size_t k = 0; k < vertex_nodes.size(); ++k)
+    CHECK((vertices.coordinates().col(k) - mesh.node(vertex_nodes[k])).norm() == 0.0);
+}
+
+TEST_CASE_TEMPLATE("free high-order nodes are placed on their elements' straight-sided maps", F, Simplex<2>, Cube<2>, Simplex<3>) {
+  const auto straight = box_mesh<F>(2, 3);
+  auto mesh = straight;
+  // Move every free node that is not a vertex; the vertices stay.
+  std::vector<bool> vertex(mesh.num_nodes(), false);
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    for (int k = 0; k < F::num_vertices; ++k) vertex[mesh.element(e)[k]] = true;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.1, 0.1);
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    if (!vertex[i] && mesh.node_class(i).kind == NodeKind::free)
+      for (int a = 0; a < F::dim; ++a) mesh.nodes()(a, i) += u(rng);
+  REQUIRE(max_node_distance(mesh, straight) > 0.01);
+  place_free_nodes_straight(mesh);
+  CHECK(max_node_distance(mesh, straight) < 1e-12);
+}
+
+// A 2D analogue of table 4.2: a held square "cavity" in the middle of a
+// triangle mesh translated by several element sizes.
+TEST_CASE("the vertex-mesh continuation untangles a mesh whose held cavity moved by several elements") {
+  auto mesh = box_mesh<Simplex<2>>(12, 3);
+  const Eigen::Vector2d shift(0.25, 0.0);  // three cells
+  std::vector<int> cavity;
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    const auto x = mesh.node(i);
+    if (x.minCoeff() > 5.0 / 12 - 1e-12 && x.maxCoeff() < 7.0 / 12 + 1e-12) {
+      mesh.node_class(i).kind = NodeKind::fixed;
+      mesh.node(i) += shift;
+      cavity.push_back(i);
+    }
+  }
+  REQUIRE(cavity.size() == 7 * 7);  // a 2 x 2 cell block at degree 3
+  const auto moved = mesh;
+  REQUIRE(mesh_state(mesh).inverted > 10);
+  OptimizeOptions o;
+  o.solver = SolverKind::matrix_free_newton;
+  o.threads = 1;
+  o.vertex_continuation = true;
+  o.regularization_scope = RegularizationScope::whole_mesh;
+  const auto r = optimize(mesh, o);
+  REQUIRE(r.continuation.has_value());
+  CHECK(r.continuation_policy == "vertex-mesh");
+  CHECK(r.continuation->inverted == 0);
+  CHECK(r.inverted() == 0);
+  CHECK(mesh_state(mesh).inverted == 0);
+  CHECK(r.min_quality() > 0.2);
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    if (mesh.node_class(i).kind != NodeKind::free) CHECK((mesh.node(i) - moved.node(i)).norm() == 0.0);
+}

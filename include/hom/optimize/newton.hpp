@@ -47,6 +47,22 @@ template <class SparseMatrix>
 using SparseCholesky = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>;
 #endif
 
+/// What the outer loop (solver.hpp) and the Newton step need of a problem:
+/// OptimizationProblem (node coordinates) and the surface problem of chapter 5
+/// (parametric coordinates) both model it.
+template <class P>
+concept AssembledProblem = requires(P& p, const P& cp, const typename P::Coordinates& X, const Eigen::VectorXd& v,
+                                    Eigen::VectorXd& g, typename P::SparseMatrix& H, const MeshState& state) {
+  { p.coordinates() } -> std::same_as<typename P::Coordinates&>;
+  { cp.num_dofs() } -> std::convertible_to<int>;
+  { cp.value(X) } -> std::convertible_to<double>;
+  { cp.displaced(X, v, 1.0) } -> std::convertible_to<typename P::Coordinates>;
+  { cp.hessian(X, HessianForm::projected, g, H) } -> std::convertible_to<double>;
+  { cp.status(X) } -> std::same_as<MeshState>;
+  { p.update_regularization(state) } -> std::convertible_to<int>;
+  { cp.scaled_gradient_norm(v) } -> std::convertible_to<double>;
+};
+
 struct NewtonSolver {
   static constexpr std::string_view name = "newton";
 
@@ -57,9 +73,9 @@ struct NewtonSolver {
   int backtracks_to_increase_shift = 3;  ///< an accepted step this short raises mu
   LineSearch line_search{};
 
-  template <ElementFamily Family, class Measure>
-  SolverResult solve(OptimizationProblem<Family, Measure>& problem, const SolverOptions& options) const {
-    Step<OptimizationProblem<Family, Measure>> step(*this);
+  template <AssembledProblem Problem>
+  SolverResult solve(Problem& problem, const SolverOptions& options) const {
+    Step<Problem> step(*this);
     const detail::SerialEigenScope serial_eigen;
     return detail::run_outer_loop(problem, options, name, step);
   }
@@ -130,6 +146,7 @@ struct NewtonSolver {
   };
 };
 
+static_assert(AssembledProblem<OptimizationProblem<Simplex<2>>>);
 static_assert(MeshSolverFor<NewtonSolver, OptimizationProblem<Simplex<2>>>);
 
 }  // namespace hom

@@ -44,6 +44,11 @@ struct OptimizeOptions {
   SolverKind solver = SolverKind::newton;
   IdealKind ideal = IdealKind::straight_sided;
   bool p_continuation = false;  ///< appendix C: untangle the linear sub-mesh first when it is tangled
+  /// Continuation from degree 1 (VertexMeshContinuation): untangle the mesh of
+  /// element vertices first when it is tangled, then place the free
+  /// high-order nodes straight-sided on it (before the appendix C stage when
+  /// p_continuation is also set). For large boundary motions (table 4.2).
+  bool vertex_continuation = false;
   /// Solver of the linear sub-mesh stage. Non-linear Gauss-Seidel by default:
   /// its local moves untangle a randomly tangled linear sub-mesh in a few
   /// sweeps (bench_untangle, p = 5: valid after 4 sweeps), where the global
@@ -71,7 +76,13 @@ struct OptimizeOptions {
   /// Stop the high-order stage as soon as every element is valid with minimum
   /// quality >= target_quality (<= 0: off, optimize to convergence).
   double target_quality = 0.0;
+  /// Stop the high-order stage once every element has been valid this many
+  /// iterations (< 0: off), for callers whose goal is a valid mesh.
+  int iterations_after_valid = -1;
   double regularization_alpha = thesis_regularization_alpha;  ///< alpha of eq 4.13
+  /// Which elements are regularized while the mesh is invalid (problem.hpp).
+  RegularizationScope regularization_scope = RegularizationScope::invalid_elements;
+  Regularization regularization() const { return {regularization_alpha, regularization_scope}; }
   bool verbose = false;
   std::function<void(const IterationInfo&)> on_iteration;
 
@@ -83,6 +94,7 @@ struct OptimizeOptions {
     o.quality_tolerance = quality_tolerance;
     o.stagnation_window = stagnation_window;
     o.target_quality = target_quality;
+    o.iterations_after_valid = iterations_after_valid;
     o.verbose = verbose;
     o.on_iteration = on_iteration;
     return o;
@@ -90,7 +102,8 @@ struct OptimizeOptions {
 };
 
 struct OptimizeResult {
-  std::optional<SolverResult> continuation;  ///< the linear sub-mesh stage, when it ran
+  std::optional<SolverResult> continuation;  ///< the continuation stage(s), when they ran
+  std::string continuation_policy;           ///< its policy's name ("none", "linear-sub-mesh", "vertex-mesh")
   SolverResult result;                       ///< the high-order optimization
   double time_s = 0.0;                       ///< both stages
 
@@ -115,11 +128,12 @@ OptimizeResult optimize_with(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMes
   linear_options.iterations_after_valid = options.continuation_iterations_after_valid;
   linear_options.target_quality = 0.0;  // the linear sub-mesh's quality is not the mesh's
   linear_options.stage = "linear";
+  out.continuation_policy = std::string(Continuation::name);
   out.continuation =
-      continuation.template run<Q>(mesh, ideal, linear_options, options.threads, measure, options.regularization_alpha);
+      continuation.template run<Q>(mesh, ideal, linear_options, options.threads, measure, options.regularization());
   auto problem = make_problem<Measure, Q>(mesh, ideal, measure);
   problem.set_threads(options.threads);
-  problem.set_regularization_alpha(options.regularization_alpha);
+  problem.set_regularization(options.regularization());
   out.result = solver.solve(problem, so);
   mesh.nodes() = problem.coordinates();
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -131,6 +145,14 @@ template <class Measure = ShapeMeasure, QuadraturePolicy Q = DefaultExactness, E
 OptimizeResult optimize(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMesh<Family>& ideal, const OptimizeOptions& options = {},
                         const Measure& measure = {}) {
   auto with_continuation = [&](const auto& solver) {
+    if (options.vertex_continuation) {
+      VertexMeshContinuation c;
+      if (options.p_continuation)
+        c.sub_mesh = LinearSubMeshContinuation{options.continuation_solver};
+      else
+        c.sub_mesh.reset();
+      return optimize_with<Measure, Q>(mesh, ideal, solver, c, options, measure);
+    }
     if (options.p_continuation)
       return optimize_with<Measure, Q>(mesh, ideal, solver, LinearSubMeshContinuation{options.continuation_solver}, options,
                                        measure);

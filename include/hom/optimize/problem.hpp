@@ -74,6 +74,25 @@ struct MeshState {
   bool all_valid() const { return inverted == 0; }
 };
 
+/// Which elements section 4.2.2's delta regularizes while the mesh is invalid.
+///   - invalid_elements (default, the thesis's "only use the regularized
+///     distortion measure when the element is invalid"): valid elements keep
+///     sigma_0, so their distortion is a barrier at det = 0 from the start;
+///   - whole_mesh: every element while any is invalid (the mesh-level reading
+///     of section 4.2.1: "delta is only set to non-zero values when an invalid
+///     mesh configuration is considered"), so a valid element may pass through
+///     a degenerate configuration on the way to untangling its neighbours.
+/// Both switch to delta = 0 everywhere once every element is valid, after
+/// which the barrier keeps the mesh valid.
+enum class RegularizationScope { invalid_elements, whole_mesh };
+
+/// The regularization policy of an optimization: alpha of eq 4.13 (delta from
+/// eq 4.14) and the scope above.
+struct Regularization {
+  double alpha = thesis_regularization_alpha;
+  RegularizationScope scope = RegularizationScope::invalid_elements;
+};
+
 /// Where a node appears: local node `local` of element `element`.
 struct NodeIncidence {
   int element = 0;
@@ -171,14 +190,23 @@ class OptimizationProblem {
   }
   double regularization_alpha() const { return alpha_; }
   void set_regularization_alpha(double alpha) { alpha_ = alpha; }
-  /// delta_e = element_regularization(alpha).delta for the invalid elements of
-  /// `state`, 0 (sigma_0) for the valid ones. Returns the number regularized.
+  RegularizationScope regularization_scope() const { return scope_; }
+  void set_regularization_scope(RegularizationScope scope) { scope_ = scope; }
+  void set_regularization(const Regularization& r) {
+    alpha_ = r.alpha;
+    scope_ = r.scope;
+  }
+  /// delta_e = element_regularization(alpha).delta for the elements the scope
+  /// names (the invalid elements of `state`, or all of them while any is
+  /// invalid), 0 (sigma_0) for the others. Returns the number regularized.
   int update_regularization(const MeshState& state) {
     const double delta = element_regularization(alpha_).delta;
+    const bool everywhere = scope_ == RegularizationScope::whole_mesh && !state.all_valid();
     int n = 0;
     for (int e = 0; e < num_elements(); ++e) {
-      deltas_[e] = state.valid[e] ? 0.0 : delta;
-      n += !state.valid[e];
+      const bool regularize = everywhere || !state.valid[e];
+      deltas_[e] = regularize ? delta : 0.0;
+      n += regularize;
     }
     return n;
   }
@@ -718,6 +746,7 @@ class OptimizationProblem {
   Measure measure_;
   int threads_ = 1;
   double alpha_ = thesis_regularization_alpha;
+  RegularizationScope scope_ = RegularizationScope::invalid_elements;
   std::vector<double> deltas_;
   std::vector<int> free_nodes_;
   std::vector<int> free_index_;  // -1 for fixed nodes (internal)
