@@ -213,6 +213,7 @@ struct Options {
   std::string solver = "matrix-free";
   int threads = 0;
   bool pcont = false;
+  std::string scope = "invalid";  ///< RegularizationScope: invalid | whole-mesh
   std::uint64_t seed = 1;
   std::optional<double> perturb;
   Quadrature quadrature = Quadrature::default_rule;
@@ -364,6 +365,7 @@ CaseResult run_case(const TetMesh& linear, const hom::GeometryModel<3>& geometry
   const std::string& solver = o.solver;
   opt.solver = hom::parse_solver_kind(solver);
   opt.p_continuation = o.pcont;
+  opt.regularization_scope = hom::parse_regularization_scope(o.scope);
   opt.threads = o.threads;
   opt.max_iterations = o.max_iterations;
   opt.verbose = o.verbose;
@@ -459,6 +461,8 @@ int main(int argc, char** argv) {
        "took 93 iterations and 53 s to converge on this case, Newton-CG 27 iterations and 2.4 s)")
       ("threads", po::value(&o.threads)->default_value(0), "threads (0: OpenMP's default)")
       ("pcont", po::bool_switch(&o.pcont), "p-continuation (appendix C)")
+      ("scope", po::value(&o.scope)->default_value("invalid"),
+       "elements regularized while the mesh is invalid: invalid (section 4.2.2) | whole-mesh")
       ("seed", po::value(&seed)->default_value(1), "seed of the perturbation")
       ("perturb", po::value(&perturb),
        "perturbation amplitude a, relative to the shortest straight-sided edge of the elements containing each "
@@ -518,6 +522,7 @@ int main(int argc, char** argv) {
     o.vtu = !vm.count("no-vtu");
     o.verbose = vm.count("verbose") > 0;
     o.optimize = !vm.count("no-optimize");
+    (void)hom::parse_regularization_scope(o.scope);  // throws on an unknown name
     if (o.peer != "none" && o.peer != "gmsh") throw std::invalid_argument("--peer: expected none or gmsh, got '" + o.peer + "'");
     if (!(o.peer_timeout > 0)) throw std::invalid_argument("--peer-timeout must be positive");
     if (o.peer_mode < 1 || o.peer_mode > 4) throw std::invalid_argument("--peer-mode: expected 1, 2, 3 or 4");
@@ -590,6 +595,7 @@ int main(int argc, char** argv) {
             .set("quadrature", std::string(quadrature_name(o.quadrature)))
             .set("threads", threads)
             .set("p_continuation", o.pcont)
+            .set("regularization_scope", o.scope)
             .set("thesis", tr ? row_json(*tr, t->elements, t->nodes) : Json())
             .set("peer", r.peer && s.name == "optimized" ? peer_json(*r.peer) : Json());
         cases.push_back(std::move(c));

@@ -65,6 +65,8 @@ grep -q 'Name="pointwise_quality"' "$work/tri3.vtu" || fail "tri3: vtu has no po
 optimize_case quad3 quad 3 4 2.2 --solver gauss-seidel --pcont --threads 1
 optimize_case tet2 tet 2 2 4.1 --solver matrix-free --measure oddy --threads 1
 optimize_case hex2 hex 2 2 2.2 --solver newton --quadrature thesis --ideal equilateral --threads 1
+optimize_case tri3v tri 3 4 4.1 --vertex-continuation --scope whole-mesh --threads 1
+[[ $(json_field "$work/tri3v.json" optimized regularization_scope) == whole-mesh ]] || fail "tri3v: json: scope not recorded"
 
 # Tangled vertices: the straight-sided ideal of those elements is inverted, so
 # the default run warns and exits 3 (outputs written); the equilateral ideal
@@ -91,6 +93,7 @@ for f in x.msh x.msh.tmp x.json x.json.tmp; do [[ ! -e "$work/$f" ]] || fail "tr
 [[ $rc -eq 2 ]] || fail "unknown --solver: exit $rc, expected 2"
 "$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --measure nope >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --measure"
 "$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --ideal nope >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --ideal"
+"$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --scope nope >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --scope"
 "$hom" optimize "$work/tri3.msh" -o "$work/x.msh" --max-iterations 0 >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --max-iterations"
 "$hom" optimize "$work/tri3.msh" >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "no -o"
 "$hom" optimize >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "no input"

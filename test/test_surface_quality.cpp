@@ -182,7 +182,8 @@ TEST_CASE("thesis parameterizations (section 5.5.1.2): formulas, derivatives, pr
     // eqs 5.29, 5.30 and the Sigma_2 analogues, written out.
     const Eigen::Vector2d p1(uv[0], uv[1] * e), p2(uv[0] * e, uv[1] * e);
     auto wave = [](const Eigen::Vector2d& p) {
-      return std::sin(std::numbers::pi * p[0]) * std::cos(std::numbers::pi * p[1]);
+      // Sigma_2's height as table 5.2 was computed (thesis_parameterizations.hpp).
+      return std::sin(std::numbers::pi / 2 * p[0]) * std::cos(std::numbers::pi / 2 * p[1]);
     };
     CHECK((thesis_sigma1(1).evaluate(uv) - Eigen::Vector3d(p1[0], p1[1], 0)).norm() < 1e-15);
     CHECK((thesis_sigma1(2).evaluate(uv) - Eigen::Vector3d(p2[0], p2[1], 0)).norm() < 1e-15);

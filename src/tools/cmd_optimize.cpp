@@ -1,5 +1,6 @@
 // hom optimize IN.msh -o OUT.msh [--solver newton|matrix-free|gauss-seidel|auto]
-//                                [--pcont] [--ideal straight|equilateral]
+//                                [--pcont] [--vertex-continuation] [--scope invalid|whole-mesh]
+//                                [--ideal straight|equilateral]
 //                                [--measure shape|oddy] [--quadrature default|thesis]
 //                                [--threads N] [--max-iterations N]
 //                                [--json FILE] [--vtu FILE] [-v|--verbose]
@@ -57,6 +58,8 @@ struct OptimizeCli {
   std::string quadrature = "default";
   std::string json, vtu;
   bool pcont = false;
+  bool vertex_continuation = false;
+  std::string scope = "invalid";
   bool verbose = false;
   int threads = 0;
   int max_iterations = 200;
@@ -108,6 +111,8 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
   }
   opt.ideal = ideal;
   opt.p_continuation = o.pcont;
+  opt.vertex_continuation = o.vertex_continuation;
+  opt.regularization_scope = hom::parse_regularization_scope(o.scope);
   opt.threads = o.threads;
   opt.max_iterations = o.max_iterations;
   opt.verbose = o.verbose;
@@ -151,10 +156,11 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
   } else {
     if (result->continuation) {
       const auto& c = *result->continuation;
-      std::printf("p-continuation (app. C): linear sub-mesh untangled by %s, %d iterations, stopped on %s, "
-                  "%d -> %d inverted sub-elements\n",
-                  c.solver.c_str(), c.iterations, std::string(hom::to_string(c.reason)).c_str(), c.initial_inverted,
-                  c.inverted);
+      std::printf("%s continuation: %s, %d iterations, stopped on %s, %d -> %d inverted (sub-)elements\n",
+                  result->continuation_policy.c_str(), c.solver.c_str(), c.iterations,
+                  std::string(hom::to_string(c.reason)).c_str(), c.initial_inverted, c.inverted);
+    } else if (o.vertex_continuation) {
+      std::printf("vertex-mesh continuation: the vertex mesh is valid, nothing to do\n");
     } else if (o.pcont) {
       std::printf("p-continuation (app. C): the linear sub-mesh is valid, nothing to do\n");
     }
@@ -201,6 +207,8 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
         .set("solver", solver_name)
         .set("auto_solver", o.solver == "auto")
         .set("p_continuation", o.pcont)
+        .set("vertex_continuation", o.vertex_continuation)
+        .set("regularization_scope", o.scope)
         .set("threads", o.threads)
         .set("iterations", result ? result->result.iterations + continuation_iterations : 0)
         .set("continuation_iterations", continuation_iterations)
@@ -242,6 +250,8 @@ void check_options(OptimizeCli& o) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("optimize: ") + e.what());
   }
+  if (o.scope != "invalid" && o.scope != "whole-mesh")
+    throw UsageError("optimize: --scope must be invalid or whole-mesh, got '" + o.scope + "'");
   if (o.threads < 0) throw UsageError("optimize: --threads must be >= 0 (0: OpenMP's default)");
   if (o.max_iterations < 1) throw UsageError("optimize: --max-iterations must be >= 1");
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu")) throw UsageError("optimize: --vtu file name must end in .vtu");
@@ -266,6 +276,12 @@ int run(int argc, char** argv) {
       ("solver", po::value(&o.solver)->default_value("auto"),
        "newton | matrix-free | gauss-seidel | auto (newton up to 20000 free coordinates, matrix-free above)")  //
       ("pcont", po::bool_switch(&o.pcont), "p-continuation (appendix C): untangle the linear sub-mesh first")  //
+      ("vertex-continuation", po::bool_switch(&o.vertex_continuation),
+       "untangle the mesh of element vertices first and place the free high-order nodes straight-sided on it "
+       "(large boundary motions)")  //
+      ("scope", po::value(&o.scope)->default_value("invalid"),
+       "elements regularized while the mesh is invalid: invalid (section 4.2.2) | whole-mesh (more robust on "
+       "heavy tangles)")  //
       ("ideal", po::value(&o.ideal)->default_value("straight"),
        "ideal element: straight (each element's straight-sided counterpart) | equilateral")  //
       ("measure", po::value(&o.measure)->default_value("shape"), "distortion measure: shape | oddy")  //

@@ -35,6 +35,9 @@
 ///          reference point under its element's (now valid) straight-sided
 ///          map; held nodes keep their curved positions;
 ///       3. then, optionally, the linear sub-mesh stage of appendix C.
+///     Step 2 moves free nodes of elements that were valid too (they lose
+///     their curvature), so this policy is for tangles of the vertices, not
+///     for a curved mesh that is nearly valid.
 ///     Step 1 falls back on a homotopy of the held vertices from the mesh's
 ///     valid snapshot when the direct solve stalls with inverted elements
 ///     (VertexMeshContinuation::untangle).
