@@ -182,13 +182,10 @@ inline SurfaceJacobianJet tangent_plane_coordinates_jet(const SurfaceTangents& B
   return jet;
 }
 
-/// J-bar(A, B) = B-bar K (eq 5.5), K = (A~^T A)^{-1} fixed (the ideal's), with
-/// its derivatives in B: J-bar is linear in B-bar, vec(J-bar) = (K^T (x) I) vec(B-bar).
-inline SurfaceJacobianJet surface_jacobian_jet(const Eigen::Matrix2d& ideal_inverse, const SurfaceTangents& B,
-                                               const Eigen::Vector3d& normal_b, bool second_order = true) {
-  const SurfaceJacobianJet b = tangent_plane_coordinates_jet(B, normal_b, second_order);
-  const Eigen::Matrix2d& K = ideal_inverse;
-  // L(i, m) = d vec(J-bar)_i / d vec(B-bar)_m.
+namespace detail {
+
+/// J-bar = B-bar K from a B-bar jet (vec(J-bar) = L vec(B-bar), K fixed).
+inline SurfaceJacobianJet right_multiply_jet(const SurfaceJacobianJet& b, const Eigen::Matrix2d& K, bool second_order) {
   Eigen::Matrix4d L = Eigen::Matrix4d::Zero();
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i)
@@ -203,6 +200,16 @@ inline SurfaceJacobianJet surface_jacobian_jet(const Eigen::Matrix2d& ideal_inve
       if (L(i, m) != 0.0) jet.second[i] += L(i, m) * b.second[m];
   }
   return jet;
+}
+
+}  // namespace detail
+
+/// J-bar(A, B) = B-bar K (eq 5.5), K = (A~^T A)^{-1} fixed (the ideal's), with
+/// its derivatives in B: J-bar is linear in B-bar, vec(J-bar) = (K^T (x) I) vec(B-bar).
+inline SurfaceJacobianJet surface_jacobian_jet(const Eigen::Matrix2d& ideal_inverse, const SurfaceTangents& B,
+                                               const Eigen::Vector3d& normal_b, bool second_order = true) {
+  return detail::right_multiply_jet(tangent_plane_coordinates_jet(B, normal_b, second_order), ideal_inverse,
+                                    second_order);
 }
 
 }  // namespace hom

@@ -156,24 +156,6 @@ inline SurfaceJacobianJet signed_tangent_coordinates_jet(const SurfaceTangents& 
   return jet;
 }
 
-/// J-bar = B-bar K from a B-bar jet (vec(J-bar) = L vec(B-bar), K fixed).
-inline SurfaceJacobianJet right_multiply_jet(const SurfaceJacobianJet& b, const Eigen::Matrix2d& K, bool second_order) {
-  Eigen::Matrix4d L = Eigen::Matrix4d::Zero();
-  for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 2; ++i)
-      for (int k = 0; k < 2; ++k) L(i + 2 * j, i + 2 * k) = K(k, j);
-  SurfaceJacobianJet jet;
-  jet.value = b.value * K;
-  jet.first = L * b.first;
-  for (int i = 0; i < 4; ++i) {
-    jet.second[i].setZero();
-    if (!second_order) continue;
-    for (int m = 0; m < 4; ++m)
-      if (L(i, m) != 0.0) jet.second[i] += L(i, m) * b.second[m];
-  }
-  return jet;
-}
-
 }  // namespace detail
 
 /// Reference normals of an element from its nodes' parameters UV (2 x n):
