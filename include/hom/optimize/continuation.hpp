@@ -228,11 +228,7 @@ struct VertexMeshContinuation {
     const Positions target = problem.coordinates();
     SolverResult total = solve_with(solver, problem, o);
     if (total.inverted == 0 || max_step_halvings <= 0) return total;
-    problem.coordinates() = snapshot;
-    if (!problem.status(snapshot).all_valid()) {  // no valid start for a homotopy: keep the direct result
-      problem.coordinates() = target;
-      return solve_with(solver, problem, o);
-    }
+    if (!problem.status(snapshot).all_valid()) return total;  // no valid start for a homotopy: keep the direct result
     const auto accumulate = [&](const SolverResult& r) {
       total.iterations += r.iterations;
       total.time_s += r.time_s;
