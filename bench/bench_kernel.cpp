@@ -434,18 +434,23 @@ Case<Family>& get_case(int p) {
 
 enum class Kernel { value, value_gradient, hessian_operator_setup, hessian_vector_product, dense_products };
 
-/// The dense products' part of flops_per_element.
-template <class Family>
-double dense_flops_per_element(Kernel k, int n, int nq) {
-  constexpr int D = Family::dim;
-  const double product = 2.0 * D * n * D * nq;
+/// Flops of one of the two products JP = X G, grad = P G^T for one element:
+/// dense, or by sum factorization (tetrahedra, quality/sum_factorization.hpp).
+template <class Problem>
+double product_flops(const Problem& problem, int n, int nq) {
+  constexpr int D = Problem::dim;
+  if (problem.use_sum_factorization()) return 2.0 * D * problem.tabulation().sum_factorization->cost_per_row();
+  return 2.0 * D * n * D * nq;
+}
+
+/// The products' part of flops_per_element.
+inline double product_flops_per_element(Kernel k, double product) {
   return k == Kernel::value ? product : (k == Kernel::hessian_operator_setup ? 0.0 : 2 * product);
 }
 
 template <class Family>
-double flops_per_element(Kernel k, int n, int nq) {
+double flops_per_element(Kernel k, double product, int nq) {
   constexpr int D = Family::dim;
-  const double product = 2.0 * D * n * D * nq;  // one of JP = X G, grad = P G^T
   switch (k) {
     case Kernel::value: return product + nq * measure_point_flops_value(D);
     case Kernel::value_gradient: return 2 * product + nq * measure_point_flops_value_gradient(D);
@@ -457,7 +462,7 @@ double flops_per_element(Kernel k, int n, int nq) {
 }
 
 template <class Family>
-void run_kernel(benchmark::State& state, Kernel kernel) {
+void run_kernel(benchmark::State& state, Kernel kernel, bool sum_factorization = true) {
   const int p = static_cast<int>(state.range(0));
   const int threads = static_cast<int>(state.range(1));
   Case<Family>* c = nullptr;
@@ -469,13 +474,14 @@ void run_kernel(benchmark::State& state, Kernel kernel) {
   }
   auto& problem = *c->problem;
   problem.set_threads(threads);
+  problem.set_sum_factorization(sum_factorization && kernel != Kernel::dense_products);
   Eigen::VectorXd g, out;
   typename Case<Family>::Problem::HessianOperator op;
   // dense_products: the two products of one evaluation block alone, with the
-  // block size problem.hpp uses (16384 / n elements, clamped to 16..128), so
+  // block size problem.hpp uses (65536 / n elements, clamped to 16..128), so
   // that the GEMM rate Eigen reaches on these shapes can be set beside the
   // kernels' rates. Timed per block, counted as `block` elements.
-  const int block = std::clamp(16384 / c->nodes, 16, 128);
+  const int block = std::clamp(65536 / c->nodes, 16, 128);
   const Eigen::MatrixXd& G = problem.tabulation().shape_gradients;
   Eigen::MatrixXd Xb, JP, P, Out;
   if (kernel == Kernel::dense_products) {
@@ -512,7 +518,8 @@ void run_kernel(benchmark::State& state, Kernel kernel) {
   const double wall = t.wall(), cpu = t.cpu();
   const double calls = double(state.iterations());
   const int elements = kernel == Kernel::dense_products ? block : c->elements;
-  const double flops = flops_per_element<Family>(kernel, c->nodes, c->points) * elements;
+  const double product = product_flops(problem, c->nodes, c->points);
+  const double flops = flops_per_element<Family>(kernel, product, c->points) * elements;
   state.counters["p"] = p;
   state.counters["threads"] = threads;
   state.counters["elements"] = elements;
@@ -528,7 +535,8 @@ void run_kernel(benchmark::State& state, Kernel kernel) {
     state.counters["GFLOPs"] = gflops;
     state.counters["GFLOPs_per_cpu_s"] = gflops_cpu;
     state.counters["flops_per_element"] = flops / elements;
-    state.counters["dense_flop_share"] = dense_flops_per_element<Family>(kernel, c->nodes, c->points) * elements / flops;
+    state.counters["product_flop_share"] = product_flops_per_element(kernel, product) * elements / flops;
+    state.counters["sum_factorized"] = problem.use_sum_factorization() ? 1 : 0;
     if (peak_1thread.wall > 0.0) state.counters["peak_fraction"] = gflops / (threads * peak_1thread.wall);
     if (peak_1thread.cpu > 0.0) state.counters["peak_fraction_cpu"] = gflops_cpu / peak_1thread.cpu;
   }
@@ -549,6 +557,15 @@ void hessian_operator_setup(benchmark::State& state) {
 template <class Family>
 void hessian_vector_product(benchmark::State& state) {
   run_kernel<Family>(state, Kernel::hessian_vector_product);
+}
+/// The same two kernels with the dense products where sum factorization applies.
+template <class Family>
+void value_gradient_dense(benchmark::State& state) {
+  run_kernel<Family>(state, Kernel::value_gradient, false);
+}
+template <class Family>
+void hessian_vector_product_dense(benchmark::State& state) {
+  run_kernel<Family>(state, Kernel::hessian_vector_product, false);
 }
 template <class Family>
 void dense_products(benchmark::State& state) {
@@ -575,6 +592,10 @@ void register_kernels(const std::string& family, const std::vector<std::int64_t>
   add("hessian_vector_product", hessian_vector_product<Family>);
   add("hessian_operator_setup", hessian_operator_setup<Family>);
   add("dense_products", dense_products<Family>, {1});
+  if constexpr (Family::is_simplex && Family::dim == 3) {
+    add("value_gradient_dense", value_gradient_dense<Family>);
+    add("hessian_vector_product_dense", hessian_vector_product_dense<Family>);
+  }
 }
 
 }  // namespace

@@ -1,8 +1,11 @@
-// hom info MESH
+// hom info MESH | MODEL.step|.iges|.brep
 //
 // Prints what a Gmsh mesh file holds: format, element types and counts, the
 // mesh hom reads from it (family, order, nodes, node classification,
-// topology), entities, physical groups and bounding box.
+// topology), entities, physical groups and bounding box. For a CAD file
+// (STEP, IGES, BREP by extension; src/cad): the healed model's solids,
+// shells, faces, edges and vertices, surface and curve kinds, healing,
+// validity and bounding box.
 
 #include <iomanip>
 #include <iostream>
@@ -12,6 +15,9 @@
 
 #include <boost/program_options.hpp>
 
+#ifdef HOM_HAVE_CAD
+#include "cad_model.hpp"
+#endif
 #include "command.hpp"
 #include "hom/mesh/topology.hpp"
 #include "mesh_io.hpp"
@@ -28,13 +34,58 @@ std::string type_name(int type) {
   return std::string(hom::io::shape_name(info->shape)) + " order " + std::to_string(info->order);
 }
 
+#ifdef HOM_HAVE_CAD
+bool is_cad_file(const std::string& path) {
+  try {
+    hom::cad::cad_format(path);
+    return true;
+  } catch (const hom::cad::CadError&) {
+    return false;
+  }
+}
+
+int describe_cad(const std::string& path) {
+  const auto m = hom::cad::read_cad(path);
+  const auto box = m.bounding_box();
+  auto kinds = [](const std::map<std::string, int>& k) {
+    std::string s;
+    for (const auto& [name, n] : k) s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + name;
+    return s.empty() ? std::string("none") : s;
+  };
+  std::ostringstream o;
+  o << m.summary() << "\n";
+  o << "format:          " << (hom::cad::cad_format(path) == hom::cad::CadFormat::step   ? "STEP"
+                               : hom::cad::cad_format(path) == hom::cad::CadFormat::iges ? "IGES"
+                                                                                          : "BREP")
+    << " (OpenCASCADE)\n";
+  o << "solids:          " << m.num_solids() << "\n";
+  o << "shells:          " << m.num_shells() << "\n";
+  o << "faces:           " << m.num_faces() << " (" << kinds(m.surface_types()) << ")\n";
+  o << "edges:           " << m.num_edges() << " (" << kinds(m.curve_types()) << ")\n";
+  o << "vertices:        " << m.num_vertices() << "\n";
+  o << "bounding box:    [" << box[0][0] << ", " << box[0][1] << ", " << box[0][2] << "] - [" << box[1][0] << ", "
+    << box[1][1] << ", " << box[1][2] << "]\n";
+  if (m.num_solids() > 0) o << "volume:          " << m.volume() << "\n";
+  o << "area:            " << m.area() << "\n";
+  o << "valid:           " << (m.valid() ? "yes" : "no") << " (BRepCheck_Analyzer)\n";
+  o << "healing:         " << (m.healing().empty() ? std::string("none needed") : m.healing().front()) << "\n";
+  for (std::size_t i = 1; i < m.healing().size(); ++i) o << "                 " << m.healing()[i] << "\n";
+  std::cout << o.str();
+  return 0;
+}
+#endif
+
 int run(int argc, char** argv) {
-  po::options_description opts("hom info MESH\n\nDescribe a Gmsh .msh file.\n\noptions");
+  po::options_description opts(
+      "hom info MESH | MODEL.step|.iges|.brep\n\nDescribe a Gmsh .msh file or a CAD model.\n\noptions");
   opts.add_options()("help,h", "show this help");
   po::variables_map vm;
   if (!hom::tools::parse_options("info", argc, argv, opts, {{"mesh", po::value<std::string>()}}, vm)) return 0;
   if (!vm.count("mesh")) throw hom::tools::UsageError("info: need a mesh file (see 'hom info --help')");
   const std::string path = vm["mesh"].as<std::string>();
+#ifdef HOM_HAVE_CAD
+  if (is_cad_file(path)) return describe_cad(path);
+#endif
   const auto data = hom::io::read_msh_data(path);
   const auto s = hom::io::summarize(data);
 
@@ -90,6 +141,6 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-const hom::tools::RegisterCommand reg{{"info", "Describe a mesh file: format, elements, entities, topology", run}};
+const hom::tools::RegisterCommand reg{{"info", "Describe a mesh file (format, elements, entities, topology) or a CAD model", run}};
 
 }  // namespace

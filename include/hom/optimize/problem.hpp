@@ -44,6 +44,7 @@
 /// several threads at once (it caches the Hessian's sparsity pattern).
 
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -193,6 +194,12 @@ class OptimizationProblem {
   const Coordinates& coordinates() const { return x_; }
   Coordinates& coordinates() { return x_; }
 
+  /// Whether the blocked kernels use the tabulation's sum factorization
+  /// (tetrahedra, sum_factorization.hpp) where it has one; on by default. The
+  /// dense products give the same results to round-off.
+  void set_sum_factorization(bool on) { sum_factorization_enabled_ = on; }
+  bool use_sum_factorization() const { return sum_factorization_enabled_ && tab_->sum_factorization != nullptr; }
+
   int threads() const { return threads_; }
   /// threads <= 0: OpenMP's default.
   void set_threads(int threads) { threads_ = detail::resolve_threads(threads); }
@@ -334,44 +341,49 @@ class OptimizationProblem {
     return sum_in_order(fe);
   }
 
-  /// s_k for each free node k: sum over its elements e (local node l) and their
-  /// quadrature points of c_q ||A_q^T G_q(l,:)^T||, i.e. the size grad_k f would
-  /// have if every eta - 1 and every d eta / dJ had size 1 (computed once).
+  /// s_k for each free node k: the size grad_k f would have if every
+  /// eta - 1 and every d eta / dJ had size 1 (computed once). Each element e
+  /// in which k is local node l contributes the root-mean-square form
+  ///   sqrt( (sum_q c_q) (sum_q c_q |A_q^T grad N_l(xi_q)|^2) ),
+  /// by Cauchy-Schwarz an upper bound of sum_q c_q |A_q^T grad N_l(xi_q)|
+  /// (equal where the reference gradient's size is constant). The squared
+  /// form costs O(n) per element for an affine ideal (A_q = A, c_q = |det| w_q):
+  /// sum_q c_q |A^T g_lq|^2 = |det| (A A^T) : K_l with K_l = sum_q w_q g_lq g_lq^T
+  /// shared by all elements; the plain sum of norms took 22 s at p = 10.
   const Eigen::VectorXd& gradient_scale() const {
     if (gradient_scale_.size() == num_free_nodes()) return gradient_scale_;
     const int ne = num_elements();
     const int n = nodes_per_element();
     const Tabulation<Family>& tab = *tab_;
     const int nq = tab.num_points();
-    // The reference gradients stacked point by point: row q n + l is grad N_l(xi_q)^T.
-    Eigen::Matrix<double, Eigen::Dynamic, dim> stacked(Eigen::Index(n) * nq, dim);
-    for (int q = 0; q < nq; ++q) stacked.middleRows(Eigen::Index(q) * n, n) = tab.shape_gradients.middleCols(q * dim, dim);
-    Eigen::Matrix<double, 1, Eigen::Dynamic> Se(1, Eigen::Index(n) * ne);
+    auto reference_gradient = [&](int l, int q) -> Eigen::Matrix<double, dim, 1> {
+      return tab.shape_gradients.row(l).template segment<dim>(dim * q).transpose();
+    };
+    const Eigen::MatrixXd& K = reference_stiffness_diagonal();
+    Eigen::VectorXd Se(Eigen::Index(n) * ne);
     HOM_PARALLEL_FOR(detail::useful_threads(threads_, ne, 64))
     for (int e = 0; e < ne; ++e) {
       const Ideal& id = ideals_[e];
+      const double volume = std::accumulate(id.weight.begin(), id.weight.end(), 0.0);
       const bool affine = std::all_of(id.inverse_jacobian.begin(), id.inverse_jacobian.end(),
                                       [&](const NodeMatrix& A) { return A == id.inverse_jacobian[0]; });
-      if (affine) {
-        // One product for all points and nodes (an affine ideal: A_q = A):
-        // |A^T grad N_l(xi_q)| for every (q, l), then the weighted sum over q.
-        const Eigen::VectorXd norms = (stacked * id.inverse_jacobian[0]).rowwise().norm();
-        const Eigen::Map<const Eigen::MatrixXd> by_point(norms.data(), n, nq);
-        Se.segment(Eigen::Index(e) * n, n) = (by_point * Eigen::Map<const Eigen::VectorXd>(id.weight.data(), nq)).transpose();
-        continue;
-      }
+      const NodeMatrix S = id.inverse_jacobian[0] * id.inverse_jacobian[0].transpose();
       for (int l = 0; l < n; ++l) {
-        double s = 0.0;
-        for (int q = 0; q < nq; ++q)
-          s += id.weight[q] * (id.inverse_jacobian[q].transpose() * stacked.row(Eigen::Index(q) * n + l).transpose()).norm();
-        Se(Eigen::Index(e) * n + l) = s;
+        double squares = 0.0;
+        if (affine) {
+          squares = id.weight[0] / tab.rule.weights[0] * K.row(l).dot(S.reshaped().transpose());
+        } else {
+          for (int q = 0; q < nq; ++q)
+            squares += id.weight[q] * (id.inverse_jacobian[q].transpose() * reference_gradient(l, q)).squaredNorm();
+        }
+        Se[Eigen::Index(e) * n + l] = std::sqrt(volume * squares);
       }
     }
     const int nf = num_free_nodes();
     Eigen::VectorXd scale(nf);
     for (int k = 0; k < nf; ++k) {
       double s = 0.0;
-      for (const auto& inc : incidences(free_nodes_[k])) s += Se(Eigen::Index(inc.element) * n + inc.local);
+      for (const auto& inc : incidences(free_nodes_[k])) s += Se[Eigen::Index(inc.element) * n + inc.local];
       scale[k] = s > 0.0 ? s : 1.0;
     }
     gradient_scale_ = std::move(scale);
@@ -511,7 +523,11 @@ class OptimizationProblem {
     op.form_ = form;
     const int stride = op.point_stride();
     op.data_.resize(std::size_t(ne) * nq * stride);
-    if (diagonal_basis_.rows() == 0) diagonal_basis_ = diagonal_block_basis<Family>(*tab_);
+    // The exact traces cost a dense product with W (n x Dim^2 nq) per block, as
+    // much as the dense Jacobian products; with sum factorization they are
+    // approximated element by element (see averaged_traces).
+    const bool averaged = use_sum_factorization();
+    if (!averaged && diagonal_basis_.rows() == 0) diagonal_basis_ = diagonal_block_basis<Family>(*tab_);
     const Eigen::MatrixXd& W = diagonal_basis_;
     for_each_block(X, [&](int first, int count, const Eigen::MatrixXd& JP, Workspace& w) {
       w.P.resize(JP.rows(), JP.cols());
@@ -543,7 +559,7 @@ class OptimizationProblem {
         });
       }
       pull_back(w, first, count, Ge);
-      const Eigen::MatrixXd traces = W * w.T.leftCols(count);  // n x count
+      const Eigen::MatrixXd traces = averaged ? averaged_traces(w.T, count) : Eigen::MatrixXd(W * w.T.leftCols(count));  // n x count
       for (int b = 0; b < count; ++b) Te.segment(Eigen::Index(first + b) * n, n) = traces.col(b);
     });
     gather(Ge, g);
@@ -614,6 +630,7 @@ class OptimizationProblem {
   // each is computed by one thread, so results do not depend on the number of threads.
   struct Workspace {
     Eigen::MatrixXd Xb, JP, P, T, out;
+    TetrahedronSumFactorization::Workspace sum_factorization;
   };
 
   int num_points() const { return tab_->num_points(); }
@@ -645,7 +662,10 @@ class OptimizationProblem {
       const int first = k * B;
       const int count = std::min(B, ne - first);
       rows(first, count, w.Xb);
-      w.JP.noalias() = w.Xb * G;
+      if (use_sum_factorization())
+        tab_->sum_factorization->gradients(w.Xb, w.JP, w.sum_factorization);
+      else
+        w.JP.noalias() = w.Xb * G;
       fn(first, count, w.JP, w);
     }
   }
@@ -665,7 +685,10 @@ class OptimizationProblem {
   /// Ge's columns of the block's elements = w.P * G^T (element b's rows Dim b ..).
   void pull_back(Workspace& w, int first, int count, Eigen::Matrix<double, dim, Eigen::Dynamic>& Ge) const {
     const int n = nodes_per_element();
-    w.out.noalias() = w.P * tab_->shape_gradients.transpose();
+    if (use_sum_factorization())
+      tab_->sum_factorization->gradients_transpose(w.P, w.out, w.sum_factorization);
+    else
+      w.out.noalias() = w.P * tab_->shape_gradients.transpose();
     for (int b = 0; b < count; ++b)
       for (int i = 0; i < n; ++i) Ge.col(Eigen::Index(first + b) * n + i) = w.out.template block<dim, 1>(dim * b, i);
   }
@@ -675,6 +698,39 @@ class OptimizationProblem {
   PointSecondOrder<dim> point_second_order(const NodeMatrix& J, const NodeMatrix& A, double c, const Reg& reg,
                                            HessianForm form, double* data) const {
     return hom::point_second_order<dim>(measure_, reg, J, A, c, form, data);
+  }
+
+  /// n x Dim^2, row l = vec(K_l), K_l = sum_q w_q grad N_l(xi_q) grad N_l(xi_q)^T
+  /// (reference rule weights): the diagonal blocks of the reference element's
+  /// stiffness matrix. Computed on first use.
+  const Eigen::MatrixXd& reference_stiffness_diagonal() const {
+    if (stiffness_diagonal_.rows() == 0) {
+      const Tabulation<Family>& tab = *tab_;
+      const int n = nodes_per_element();
+      Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, dim * dim);
+      for (int q = 0; q < tab.num_points(); ++q)
+        for (int l = 0; l < n; ++l) {
+          const Eigen::Matrix<double, dim, 1> g = tab.shape_gradients.row(l).template segment<dim>(dim * q).transpose();
+          K.row(l) += tab.rule.weights[q] * (g * g.transpose()).reshaped().transpose();
+        }
+      stiffness_diagonal_ = std::move(K);
+    }
+    return stiffness_diagonal_;
+  }
+
+  /// The nodal traces of the preconditioner with each element's point matrices
+  /// T_q (columns of T, Dim^2 per point, weights c_q included) replaced by
+  /// w_q T-bar, T-bar = sum_q T_q / sum_q w_q: t_l = K_l : T-bar, exact where
+  /// T_q / w_q is constant over the element. O(n) instead of O(n nq) per element.
+  Eigen::MatrixXd averaged_traces(const Eigen::MatrixXd& T, int count) const {
+    constexpr int D2 = dim * dim;
+    const int nq = num_points();
+    const double reference_volume = std::accumulate(tab_->rule.weights.begin(), tab_->rule.weights.end(), 0.0);
+    Eigen::MatrixXd Tbar(D2, count);
+    for (int b = 0; b < count; ++b)
+      Tbar.col(b) = Eigen::Map<const Eigen::Matrix<double, D2, Eigen::Dynamic>>(T.col(b).data(), D2, nq).rowwise().sum() /
+                    reference_volume;
+    return reference_stiffness_diagonal() * Tbar;
   }
 
   static double sum_in_order(const std::vector<double>& v) {
@@ -771,6 +827,7 @@ class OptimizationProblem {
   }
 
   const Tabulation<Family>* tab_;
+  bool sum_factorization_enabled_ = true;
   Coordinates x_;
   Connectivity elements_;
   std::vector<bool> free_;
@@ -787,6 +844,7 @@ class OptimizationProblem {
   mutable std::unique_ptr<HessianPattern> pattern_;
   mutable Eigen::VectorXd gradient_scale_;
   mutable Eigen::MatrixXd diagonal_basis_;  // diagonal_block_basis(tab), on first use
+  mutable Eigen::MatrixXd stiffness_diagonal_;  // reference_stiffness_diagonal(), on first use
 };
 
 }  // namespace hom

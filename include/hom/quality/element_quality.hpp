@@ -62,7 +62,7 @@ ElementQuality element_quality(const Tabulation<Family>& tab, const Eigen::Ref<c
   constexpr int D = Family::dim;
   using Mat = Eigen::Matrix<double, D, D>;
   const int nq = tab.num_points();
-  const Eigen::Matrix<double, D, Eigen::Dynamic> JP = X * tab.shape_gradients;
+  const Eigen::Matrix<double, D, Eigen::Dynamic> JP = reference_jacobians(tab, X);
   const ClampedDeterminant validation;
 
   ElementQuality r;

@@ -80,6 +80,7 @@
 /// of one surface stop at the same accuracy.
 
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -492,10 +493,10 @@ class SurfaceOptimizationProblem {
     return sum_in_order(fe);
   }
 
-  /// s_k for each free node k: sum over its elements (local node l) and their
-  /// quadrature points of c_q ||K_q^T G_q(l,:)^T||, the size the physical
-  /// gradient at the node would have if every eta - 1 and d eta / dJ-bar were
-  /// 1 (OptimizationProblem::gradient_scale's analogue; computed once).
+  /// s_k for each free node k: the size the physical gradient at the node
+  /// would have if every eta - 1 and d eta / dJ-bar were 1, computed once, in
+  /// the root-mean-square form of OptimizationProblem::gradient_scale: each
+  /// element (local node l) adds sqrt((sum_q c_q) sum_q c_q |K_q^T G_q(l,:)^T|^2).
   const Eigen::VectorXd& gradient_scale() const {
     if (gradient_scale_.size() == num_free_nodes()) return gradient_scale_;
     const int n = nodes_per_element();
@@ -503,12 +504,15 @@ class SurfaceOptimizationProblem {
     Eigen::VectorXd s = Eigen::VectorXd::Zero(num_free_nodes());
     for (int e = 0; e < num_elements(); ++e) {
       const SurfaceIdealAtPoints& id = ideals_[e];
+      const double area = std::accumulate(id.weight.begin(), id.weight.end(), 0.0);
       for (int l = 0; l < n; ++l) {
         const int k = free_index_[elements_(l, e)];
         if (k < 0) continue;
+        double squares = 0.0;
         for (int q = 0; q < tab.num_points(); ++q)
-          s[k] += id.weight[q] *
-                  (id.inverse[q].transpose() * tab.shape_gradients.row(l).template segment<2>(2 * q).transpose()).norm();
+          squares += id.weight[q] *
+                     (id.inverse[q].transpose() * tab.shape_gradients.row(l).template segment<2>(2 * q).transpose()).squaredNorm();
+        s[k] += std::sqrt(area * squares);
       }
     }
     for (int k = 0; k < s.size(); ++k)

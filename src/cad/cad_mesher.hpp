@@ -1,0 +1,205 @@
+#pragma once
+/// @file cad_mesher.hpp
+/// Linear meshes of a CadModel whose boundary nodes are classified on the
+/// model's vertices, edges and faces (chapter 6, section 6.1 step 1: the
+/// linear mesh the a posteriori pipeline curves), made with Gmsh's library
+/// (OpenCASCADE kernel), or supplied by the user and classified by
+/// projection. Compiled in src/cad; this header needs only hom's headers.
+///
+///   auto cad = hom::cad::read_cad("part.step");
+///   hom::cad::CadMeshOptions o;
+///   o.size = 2.0;
+///   auto mesh = hom::cad::mesh_cad<hom::Simplex<3>>(cad, o);   // tetrahedra
+///   auto skin = hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 3>(cad, o);  // surface triangles
+///
+/// Entity tags of the result are the CadModel's (cad_model.hpp): a node on
+/// face f has entity {2, f} and (u, v) with cad.surface(f).evaluate(u, v)
+/// equal to its position; on edge e, {1, e} and t; on vertex v, {0, v}
+/// (fixed). Element entities are solid tags (faces for a surface mesh),
+/// boundary facets carry face tags (edge tags for a 2D mesh).
+///
+/// Gmsh gets the healed shape itself (importShapesNativePointer: Debian's
+/// Gmsh and hom_cad use the same OpenCASCADE). Its entity tags need not be
+/// the model's, so entities are matched: Gmsh points to model vertices by
+/// position; Gmsh curves and surfaces to the model edge / face on which
+/// their mesh nodes lie at the same parameters (Gmsh uses the OpenCASCADE
+/// parameterization) and, for faces, inside the trimming; Gmsh volumes to
+/// the solid with the same faces. Then every boundary node is checked:
+/// |S(u, v) - x| (|C(t) - x|, |V - x|) must not exceed `tolerance` times
+/// the model's size. An entity or node that cannot be classified is an error
+/// (MeshingError) that names it.
+
+#include <algorithm>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <optional>
+#include <vector>
+#include <stdexcept>
+#include <string>
+
+#include "cad_model.hpp"
+#include "hom/element/cube.hpp"
+#include "hom/element/simplex.hpp"
+#include "hom/io/msh.hpp"
+#include "hom/mesh/mesh.hpp"
+#include "hom/mesh/topology.hpp"
+
+namespace hom::cad {
+
+/// Meshing or classification failed (Gmsh failed, a node off the model).
+class MeshingError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct CadMeshOptions {
+  int dim = 3;                   ///< 3: tetrahedra of the solids; 2: triangles / quads of the faces
+  bool quads = false;            ///< 2D: recombine into quadrilaterals (Mesh.RecombineAll)
+  double size = 0.0;             ///< Mesh.MeshSizeMax; 0: the model's bounding-box diagonal / 20
+  double size_min = 0.0;         ///< Mesh.MeshSizeMin
+  int size_from_curvature = 0;   ///< Mesh.MeshSizeFromCurvature: elements per 2 pi radians; 0: off
+  std::map<int, double> vertex_sizes;  ///< mesh size at model vertices (tag -> size)
+  int algorithm_2d = 0;          ///< Mesh.Algorithm; 0: 6 (Frontal-Delaunay; 4.8.4's 8 crashes on surfaces with a pole)
+  int algorithm_3d = 1;          ///< Mesh.Algorithm3D (1: Delaunay)
+  int seed = 1;                  ///< Mesh.RandomSeed
+  int threads = 1;               ///< General.NumThreads (1: deterministic)
+  bool verbose = false;          ///< Gmsh's messages on the terminal
+  double tolerance = 1e-8;       ///< classification tolerance, relative to the model's size
+};
+
+/// Meshes the model with Gmsh and returns the mesh as MSH data with the
+/// model's entity tags (see above); nodes keep their parametric coordinates.
+/// Throws MeshingError.
+io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& options = {});
+
+/// The mesh of Family (Simplex<3>; Simplex<2> / Cube<2> with SpaceDim 3 for
+/// a surface mesh, SpaceDim 2 for a planar model in z = 0), degree 1.
+template <ElementFamily Family, NodeSet Nodes = WarpBlend, int SpaceDim = Family::dim>
+Mesh<Family, Nodes, SpaceDim> mesh_cad(const CadModel& cad, CadMeshOptions options = {}) {
+  options.dim = Family::dim;
+  options.quads = !Family::is_simplex;
+  if constexpr (Family::dim == 3) static_assert(Family::is_simplex, "hom::cad::mesh_cad: volume meshes are tetrahedral");
+  return io::to_mesh<Family, Nodes, SpaceDim>(cad_mesh_data(cad, options));
+}
+
+/// Where a point lies on the model: the lowest-dimensional entity (vertex,
+/// then edge, then face) within `tolerance` (absolute), with its parameters.
+struct CadPointClass {
+  EntityId entity;
+  int num_params = 0;
+  std::array<double, 2> params{};
+  double distance = 0.0;
+};
+
+/// Classifies each column of `points` (3 x N); std::nullopt for a point
+/// farther than `tolerance` from every face.
+std::vector<std::optional<CadPointClass>> classify_points(const CadModel& cad, const Eigen::Matrix3Xd& points,
+                                                          double tolerance);
+
+/// Classifies a user-supplied linear mesh (its boundary nodes: those of the
+/// topological boundary of a volume mesh, every node of a surface mesh) on
+/// the model by projection: nodes within `tolerance` (absolute) of a vertex
+/// become fixed on it, of an edge or face on_entity with their parameters;
+/// boundary facets get the face (edge) they lie on; the mesh's entities
+/// become the model's. Throws MeshingError naming the first boundary node
+/// that is farther than `tolerance` from the model.
+template <ElementFamily Family, NodeSet Nodes, int SpaceDim>
+  requires(SpaceDim == 3)
+void classify(Mesh<Family, Nodes, SpaceDim>& mesh, const CadModel& cad, double tolerance) {
+  const int n = mesh.num_nodes();
+  std::vector<bool> boundary(n, Family::dim == 2);
+  std::vector<BoundaryFacet<Family>> facets;
+  if constexpr (Family::dim == 3) {
+    const Topology<Family> topo(mesh);
+    for (const FacetRef& f : topo.boundary_facets()) {
+      BoundaryFacet<Family> bf;
+      bf.element = f.element;
+      bf.local_facet = f.local;
+      const auto lv = facet_vertices<Family>(f.local);
+      for (int k = 0; k < facet_num_vertices<Family>; ++k) bf.vertices[k] = mesh.vertex(f.element, lv[k]);
+      for (int id : mesh.facet_node_ids(bf)) boundary[id] = true;
+      facets.push_back(bf);
+    }
+  }
+  std::vector<int> ids;
+  for (int i = 0; i < n; ++i)
+    if (boundary[i]) ids.push_back(i);
+  Eigen::Matrix3Xd x(3, ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) x.col(k) = mesh.node(ids[k]);
+  const auto cls = classify_points(cad, x, tolerance);
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    if (!cls[k]) {
+      const auto p = mesh.node(ids[k]);
+      throw MeshingError(cad.name() + ": mesh node " + std::to_string(ids[k]) + " at (" + std::to_string(p[0]) + ", " +
+                         std::to_string(p[1]) + ", " + std::to_string(p[2]) + ") is farther than " +
+                         std::to_string(tolerance) + " from every face of the model");
+    }
+    NodeClass& c = mesh.node_class(ids[k]);
+    c.entity = cls[k]->entity;
+    c.kind = cls[k]->entity.dim == 0 ? NodeKind::fixed : NodeKind::on_entity;
+    c.num_params = cls[k]->num_params;
+    c.params = cls[k]->params;
+  }
+  // A facet lies on the face shared by all its vertices' entities (the
+  // faces of a vertex or edge, or the face itself).
+  auto faces_of = [&](EntityId e) {
+    std::vector<int> f;
+    if (e.dim == 2) f.push_back(e.tag);
+    if (e.dim == 1) f = cad.edge_faces(e.tag);
+    if (e.dim == 0)
+      for (int ed = 1; ed <= cad.num_edges(); ++ed) {
+        const auto v = cad.edge_vertices(ed);
+        if (v[0] == e.tag || v[1] == e.tag)
+          for (int t : cad.edge_faces(ed)) f.push_back(t);
+      }
+    std::sort(f.begin(), f.end());
+    f.erase(std::unique(f.begin(), f.end()), f.end());
+    return f;
+  };
+  auto common_face = [&](const auto& vertex_ids, const std::string& what) {
+    std::vector<int> common;
+    bool first = true;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int v : vertex_ids) {
+      centroid += mesh.node(v);
+      const auto f = faces_of(*mesh.node_class(v).entity);
+      if (first) {
+        common = f;
+        first = false;
+      } else {
+        std::vector<int> both;
+        std::set_intersection(common.begin(), common.end(), f.begin(), f.end(), std::back_inserter(both));
+        common = both;
+      }
+    }
+    if (common.empty()) throw MeshingError(cad.name() + ": " + what + " has vertices on no common face of the model");
+    if (common.size() == 1) return common.front();
+    centroid /= double(vertex_ids.size());
+    int best = common.front();  // the face nearest to the centroid
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int f : common) {
+      const auto s = cad.surface(f);
+      const double d = (s.evaluate(s.project(centroid)) - centroid).norm();
+      if (d < best_d) {
+        best_d = d;
+        best = f;
+      }
+    }
+    return best;
+  };
+  if constexpr (Family::dim == 3) {
+    for (auto& bf : facets)
+      bf.entity_tag = common_face(bf.vertices, "boundary facet of element " + std::to_string(bf.element));
+    mesh.boundary_facets() = std::move(facets);
+  } else {
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      std::array<int, Family::num_vertices> v{};
+      for (int k = 0; k < Family::num_vertices; ++k) v[k] = mesh.vertex(e, k);
+      mesh.element_entities()[e] = common_face(v, "element " + std::to_string(e));
+    }
+  }
+  mesh.entities() = cad.entities();
+}
+
+}  // namespace hom::cad

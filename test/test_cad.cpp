@@ -1,0 +1,552 @@
+// The OpenCASCADE layer (src/cad): CAD faces and edges as hom surfaces and
+// curves (against the analytic models and finite differences), projection
+// and arc length, reading and writing STEP / IGES / BREP with clear errors,
+// the built-in models, meshing a model with Gmsh with every boundary node
+// classified on it, and classifying a given mesh by projection. If
+// ../shared/data/cad exists, its real CAD files are read too.
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <set>
+#include <string>
+
+#include "cad_mesher.hpp"
+#include "cad_model.hpp"
+#include "hom/geometry/cylinder.hpp"
+#include "hom/geometry/plane.hpp"
+#include "hom/geometry/sphere.hpp"
+#include "hom/nodes/gauss_lobatto.hpp"
+
+using namespace hom;
+using hom::cad::CadModel;
+
+namespace {
+
+constexpr double pi = std::numbers::pi;
+
+// A fresh temporary directory, removed at the end of the test.
+struct TempDir {
+  std::filesystem::path path;
+  TempDir() {
+    std::random_device rd;
+    path = std::filesystem::temp_directory_path() / ("hom_test_cad_" + std::to_string(rd()));
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  std::string operator/(const std::string& name) const { return (path / name).string(); }
+};
+
+// The first face of the model whose surface is of `type`.
+int face_of_type(const CadModel& m, const std::string& type) {
+  for (int f = 1; f <= m.num_faces(); ++f)
+    if (m.surface(f).type() == type) return f;
+  return 0;
+}
+
+// Random (u, v) inside a face's parameter box (away from its bounds by
+// `margin` of its size).
+Eigen::Vector2d random_uv(const cad::OccSurface& s, std::mt19937& rng, double margin = 0.02) {
+  std::uniform_real_distribution<double> t(margin, 1.0 - margin);
+  Eigen::Vector2d uv;
+  for (int k = 0; k < 2; ++k) {
+    const auto r = s.range(k);
+    uv[k] = r.lo + t(rng) * (r.hi - r.lo);
+  }
+  return uv;
+}
+
+// S_u, S_v and S_uu, S_uv, S_vv against central differences.
+template <class S>
+void check_derivatives_fd(const S& s, const Eigen::Vector2d& uv, double scale) {
+  const double h = 1e-6;
+  const Eigen::Vector2d du(h, 0), dv(0, h);
+  const auto d = s.derivatives(uv);
+  const Eigen::Vector3d fu = (s.evaluate(uv + du) - s.evaluate(uv - du)) / (2 * h);
+  const Eigen::Vector3d fv = (s.evaluate(uv + dv) - s.evaluate(uv - dv)) / (2 * h);
+  CHECK((d.col(0) - fu).norm() <= 1e-7 * scale);
+  CHECK((d.col(1) - fv).norm() <= 1e-7 * scale);
+  const auto dd = s.second_derivatives(uv);
+  const Eigen::Matrix<double, 3, 2> d_u = (s.derivatives(uv + du) - s.derivatives(uv - du)) / (2 * h);
+  const Eigen::Matrix<double, 3, 2> d_v = (s.derivatives(uv + dv) - s.derivatives(uv - dv)) / (2 * h);
+  CHECK((dd.uu - d_u.col(0)).norm() <= 1e-6 * scale);
+  CHECK((dd.uv - d_u.col(1)).norm() <= 1e-6 * scale);
+  CHECK((dd.uv - d_v.col(0)).norm() <= 1e-6 * scale);
+  CHECK((dd.vv - d_v.col(1)).norm() <= 1e-6 * scale);
+}
+
+// The OCC face and the analytic surface are the same parameterization up
+// to a shift of the parameters (the frames may differ by a rotation about
+// the axis): values, first and second derivatives agree at uv and uv + shift.
+template <class A>
+void check_against_analytic(const cad::OccSurface& occ, const A& analytic, double scale, int samples = 40) {
+  std::mt19937 rng(7);
+  const Eigen::Vector2d uv0 = random_uv(occ, rng, 0.2);
+  const Eigen::Vector2d shift = analytic.project(occ.evaluate(uv0)) - uv0;
+  for (int i = 0; i < samples; ++i) {
+    const Eigen::Vector2d uv = random_uv(occ, rng, 0.05);
+    const Eigen::Vector2d uva = uv + shift;
+    CHECK((occ.evaluate(uv) - analytic.evaluate(uva)).norm() <= 1e-12 * scale);
+    CHECK((occ.derivatives(uv) - analytic.derivatives(uva)).norm() <= 1e-12 * scale);
+    const auto a = occ.second_derivatives(uv), b = analytic.second_derivatives(uva);
+    CHECK((a.uu - b.uu).norm() <= 1e-12 * scale);
+    CHECK((a.uv - b.uv).norm() <= 1e-12 * scale);
+    CHECK((a.vv - b.vv).norm() <= 1e-12 * scale);
+    check_derivatives_fd(occ, uv, scale);
+  }
+}
+
+// x = S(uv) projects back onto x; a point moved along the normal projects to
+// the same parameters.
+void check_projection_round_trip(const cad::OccSurface& s, const Eigen::Vector2d& uv, double tol) {
+  const Eigen::Vector3d x = s.evaluate(uv);
+  const Eigen::Vector2d p = s.project(x);
+  CHECK((s.evaluate(p) - x).norm() <= tol);
+  for (int k = 0; k < 2; ++k) {
+    const auto r = s.range(k);
+    CHECK(p[k] >= r.lo - 1e-12);
+    CHECK(p[k] <= r.hi + 1e-12);
+    if (r.periodic) CHECK(p[k] < r.hi);
+  }
+}
+
+std::filesystem::path shared_cad_dir() {
+  if (const char* env = std::getenv("HOM_CAD_DATA")) return env;
+  return std::filesystem::absolute(std::filesystem::path(__FILE__)).parent_path() / ".." / ".." / "shared" / "data" / "cad";
+}
+
+}  // namespace
+
+TEST_CASE("OCC sphere face is hom's Sphere") {
+  const Eigen::Vector3d c(1.0, -2.0, 0.5);
+  const double r = 1.7;
+  const auto m = cad::sphere_model(c, r);
+  REQUIRE(m.num_faces() == 1);
+  const auto s = m.surface(1);
+  CHECK(s.type() == "sphere");
+  CHECK(s.range(0).periodic);
+  CHECK(s.range(0).length() == doctest::Approx(2 * pi));
+  CHECK_FALSE(s.range(1).periodic);
+  CHECK(s.range(1).lo == doctest::Approx(-pi / 2));
+  CHECK(s.range(1).hi == doctest::Approx(pi / 2));
+  check_against_analytic(s, Sphere(c, r), r);
+
+  // Projection: round trips everywhere, across the seam and at the poles.
+  std::mt19937 rng(3);
+  for (int i = 0; i < 50; ++i) check_projection_round_trip(s, random_uv(s, rng, 0.0), 1e-12 * r);
+  const auto ru = s.range(0);
+  for (double u : {ru.lo, ru.lo + 1e-10, ru.hi - 1e-10, ru.lo - 1e-3, ru.hi + 1e-3})
+    for (double v : {-1.0, 0.0, 0.3, pi / 2 - 1e-7, -pi / 2 + 1e-9}) {
+      check_projection_round_trip(s, {u, v}, 1e-11 * r);
+      // Off the surface: along the radius, the closest point is radial.
+      const Eigen::Vector3d x = s.evaluate({u, v});
+      const Eigen::Vector3d out = c + 1.3 * (x - c);
+      CHECK((s.evaluate(s.project(out)) - x).norm() <= 1e-9 * r);
+    }
+  // The poles themselves (any longitude).
+  for (double sgn : {-1.0, 1.0}) {
+    const Eigen::Vector3d pole = c + sgn * r * Eigen::Vector3d::UnitZ();
+    CHECK((s.evaluate(s.project(pole)) - pole).norm() <= 1e-9 * r);
+  }
+}
+
+TEST_CASE("OCC cylinder and plane faces are hom's Cylinder and Plane") {
+  const Eigen::Vector3d base(0.5, 0.25, -1.0), axis = Eigen::Vector3d(1, 2, 2).normalized();
+  const double r = 0.8, h = 3.0;
+  const auto m = cad::cylinder_model(base, axis, r, h);
+  CHECK(m.num_faces() == 3);
+  CHECK(m.surface_types().at("cylinder") == 1);
+  CHECK(m.surface_types().at("plane") == 2);
+  const int lateral = face_of_type(m, "cylinder");
+  REQUIRE(lateral > 0);
+  const auto s = m.surface(lateral);
+  CHECK(s.range(0).periodic);
+  CHECK(s.range(1).lo == doctest::Approx(0.0));
+  CHECK(s.range(1).hi == doctest::Approx(h));
+  check_against_analytic(s, Cylinder(base, axis, r), std::max(r, h));
+  std::mt19937 rng(5);
+  for (int i = 0; i < 30; ++i) check_projection_round_trip(s, random_uv(s, rng, 0.0), 1e-12 * h);
+  // Across the seam: points at u = lo +- eps project next to each other.
+  const double lo = s.range(0).lo;
+  const Eigen::Vector2d a = s.project(s.evaluate({lo + 1e-9, 1.0})), b = s.project(s.evaluate({lo - 1e-9, 1.0}));
+  CHECK(std::abs(s.range(0).unwrap(a[0], b[0]) - b[0]) == doctest::Approx(2e-9).epsilon(1e-3));
+
+  for (int f = 1; f <= m.num_faces(); ++f) {
+    if (f == lateral) continue;
+    const auto p = m.surface(f);
+    CHECK_FALSE(p.range(0).periodic);
+    const Eigen::Matrix<double, 3, 2> d = p.derivatives({0, 0});
+    const Plane plane(p.evaluate({0, 0}), d.col(0).cross(d.col(1)), d.col(0));
+    check_against_analytic(p, plane, r, 10);
+    // The cap's plane is perpendicular to the axis, at height 0 or h.
+    CHECK(std::abs(plane.normal().dot(axis)) == doctest::Approx(1.0));
+    const double height = (p.evaluate({0.1, 0.2}) - base).dot(axis);
+    CHECK(std::min(std::abs(height), std::abs(height - h)) <= 1e-12);
+    for (int i = 0; i < 10; ++i) check_projection_round_trip(p, random_uv(p, rng), 1e-12);
+  }
+}
+
+TEST_CASE("OCC edges: derivatives, projection, arc length and its inverse") {
+  const double r = 0.8, h = 3.0;
+  const auto m = cad::cylinder_model(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), r, h);
+  int circles = 0;
+  std::mt19937 rng(11);
+  for (int e = 1; e <= m.num_edges(); ++e) {
+    REQUIRE_FALSE(m.degenerated(e));
+    const auto c = m.curve(e);
+    const auto range = c.range();
+    if (c.type() == "circle") {
+      ++circles;
+      CHECK(range.periodic);
+      CHECK(c.length() == doctest::Approx(2 * pi * r).epsilon(1e-12));
+    } else {
+      CHECK(c.type() == "line");  // the seam
+      CHECK(c.length() == doctest::Approx(h).epsilon(1e-12));
+    }
+    std::uniform_real_distribution<double> t(range.lo, range.hi);
+    for (int i = 0; i < 10; ++i) {
+      const double u = t(rng), du = 1e-6;
+      CHECK((c.derivative(u) - (c.evaluate(u + du) - c.evaluate(u - du)) / (2 * du)).norm() <= 1e-8);
+      CHECK((c.second_derivative(u) - (c.derivative(u + du) - c.derivative(u - du)) / (2 * du)).norm() <= 1e-7);
+      const Eigen::Vector3d x = c.evaluate(u);
+      CHECK((c.evaluate(c.project(x)) - x).norm() <= 1e-12);
+      // Arc length: s(u0, u) and its inverse.
+      const double u0 = range.lo + 0.1 * range.length();
+      const double s = c.arc_length(u0, u);
+      if (c.type() == "circle") CHECK(s == doctest::Approx(r * (u - u0)).epsilon(1e-12));
+      CHECK(c.parameter_at_length(u0, s) == doctest::Approx(u).epsilon(1e-11));
+      CHECK(c.arc_length(u, u0) == doctest::Approx(-s));
+    }
+  }
+  CHECK(circles == 2);
+
+  // NURBS edges (rational quadratic quarter circles): the arc length is
+  // exact pi r / 2, and the parameter at a fraction of it lands on the
+  // circle at that angle.
+  const Eigen::Vector3d center(0.1, 0.2, 0.3);
+  const double rs = 0.5;
+  const auto sphere = cad::nurbs_sphere_model(center, rs);
+  int quarters = 0;
+  for (int e = 1; e <= sphere.num_edges(); ++e) {
+    if (sphere.degenerated(e)) continue;
+    const auto c = sphere.curve(e);
+    CHECK(c.type() == "bspline");
+    CHECK(c.length() == doctest::Approx(pi * rs / 2).epsilon(1e-10));
+    const auto range = c.range();
+    const Eigen::Vector3d a = c.evaluate(range.lo) - center, b = c.evaluate(range.hi) - center;
+    for (double f : {0.1, 1.0 / 3.0, 0.5, 0.9}) {
+      const double u = c.parameter_at_length(range.lo, f * c.length());
+      const Eigen::Vector3d x = c.evaluate(u) - center;
+      CHECK(x.norm() == doctest::Approx(rs).epsilon(1e-12));
+      CHECK(std::acos(std::clamp(x.dot(a) / (rs * rs), -1.0, 1.0)) == doctest::Approx(f * pi / 2).epsilon(1e-9));
+      CHECK(std::acos(std::clamp(x.dot(b) / (rs * rs), -1.0, 1.0)) == doctest::Approx((1 - f) * pi / 2).epsilon(1e-9));
+    }
+    ++quarters;
+  }
+  CHECK(quarters == 12);  // 4 on the equator, 8 meridian quarters
+}
+
+TEST_CASE("NURBS sphere: 8 exact rational patches, one closed solid") {
+  const Eigen::Vector3d c(0.1, 0.2, 0.3);
+  const double r = 0.5;
+  const auto m = cad::nurbs_sphere_model(c, r);
+  CHECK(m.num_solids() == 1);
+  CHECK(m.num_shells() == 1);
+  CHECK(m.num_faces() == 8);
+  CHECK(m.surface_types().at("bspline") == 8);
+  CHECK(m.valid());
+  CHECK(m.volume() == doctest::Approx(4.0 / 3.0 * pi * r * r * r).epsilon(1e-6));
+  CHECK(m.area() == doctest::Approx(4 * pi * r * r).epsilon(1e-6));
+  std::mt19937 rng(13);
+  for (int f = 1; f <= 8; ++f) {
+    const auto s = m.surface(f);
+    CHECK_FALSE(s.range(0).periodic);
+    CHECK_FALSE(s.range(1).periodic);
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector2d uv = random_uv(s, rng, 0.0);
+      CHECK((s.evaluate(uv) - c).norm() == doctest::Approx(r).epsilon(1e-13));
+      // The outward normal (reversed faces flip it) points away from the centre.
+      const auto d = s.derivatives(uv);
+      const Eigen::Vector3d n = (s.reversed() ? -1.0 : 1.0) * d.col(0).cross(d.col(1));
+      if (n.norm() > 1e-8) CHECK(n.dot(s.evaluate(uv) - c) > 0);
+      check_derivatives_fd(s, random_uv(s, rng, 0.05), r);
+      check_projection_round_trip(s, uv, 1e-11);
+      // A point off the sphere projects radially.
+      const Eigen::Vector3d x = s.evaluate(uv), out = c + 1.2 * (x - c);
+      CHECK((s.evaluate(s.project(out)) - x).norm() <= 1e-9);
+      CHECK(s.contains(uv));
+    }
+  }
+}
+
+TEST_CASE("cube with a spherical cavity built with OpenCASCADE") {
+  const auto m = cad::cube_with_cavity_model();
+  CHECK(m.num_solids() == 1);
+  CHECK(m.num_faces() == 7);
+  CHECK(m.surface_types().at("plane") == 6);
+  CHECK(m.surface_types().at("sphere") == 1);
+  CHECK(m.valid());
+  CHECK(m.volume() == doctest::Approx(125.0 - 4.0 / 3.0 * pi * 0.125).epsilon(1e-9));
+  const auto box = m.bounding_box();
+  CHECK(box[0].norm() <= 1e-6);
+  CHECK((box[1] - Eigen::Vector3d::Constant(5.0)).norm() <= 1e-6);
+  const int sphere = face_of_type(m, "sphere");
+  REQUIRE(sphere > 0);
+  check_against_analytic(m.surface(sphere), Sphere(Eigen::Vector3d::Constant(2.5), 0.5), 0.5, 10);
+  // The geometry model has every face and every edge with a curve.
+  const auto g = m.geometry_model();
+  CHECK(int(g.surfaces().size()) == 7);
+  int curves = 0;
+  for (int e = 1; e <= m.num_edges(); ++e) curves += !m.degenerated(e);
+  CHECK(int(g.curves().size()) == curves);
+  CHECK(m.summary().find("1 solid, 2 shells, 7 faces") != std::string::npos);  // the cavity is a shell
+  // Every edge's ends are its vertices; pcurves land on the same points.
+  for (int e = 1; e <= m.num_edges(); ++e) {
+    if (m.degenerated(e)) continue;
+    const auto c = m.curve(e);
+    const auto v = m.edge_vertices(e);
+    CHECK((c.evaluate(c.range().lo) - m.vertex(v[0])).norm() <= 1e-7);
+    CHECK((c.evaluate(c.range().hi) - m.vertex(v[1])).norm() <= 1e-7);
+    for (int f : m.edge_faces(e)) {
+      const double t = c.range().lo + 0.37 * c.range().length();
+      CHECK((m.surface(f).evaluate(m.edge_uv_on_face(e, f, t)) - c.evaluate(t)).norm() <= 1e-7);
+    }
+  }
+}
+
+TEST_CASE("write and read back BREP, STEP and IGES") {
+  const TempDir dir;
+  const auto m = cad::cube_with_cavity_model();
+  for (const std::string name : {"cube.brep", "cube.STEP", "cube.stp", "cube.igs", "cube.IGES"}) {
+    CAPTURE(name);
+    const std::string path = dir / name;
+    cad::write_cad(m, path);
+    REQUIRE(std::filesystem::exists(path));
+    const auto back = cad::read_cad(path);
+    CHECK(back.name() == path);
+    CHECK(back.num_faces() == 7);
+    CHECK(back.num_solids() == 1);
+    CHECK(back.surface_types() == m.surface_types());
+    CHECK(back.volume() == doctest::Approx(m.volume()).epsilon(1e-6));
+    const auto b0 = m.bounding_box(), b1 = back.bounding_box();
+    CHECK((b0[0] - b1[0]).norm() <= 1e-5);
+    CHECK((b0[1] - b1[1]).norm() <= 1e-5);
+    // The sphere is still the sphere.
+    const int s = face_of_type(back, "sphere");
+    REQUIRE(s > 0);
+    std::mt19937 rng(1);
+    for (int i = 0; i < 5; ++i)
+      CHECK((back.surface(s).evaluate(random_uv(back.surface(s), rng)) - Eigen::Vector3d::Constant(2.5)).norm() ==
+            doctest::Approx(0.5).epsilon(1e-12));
+  }
+  // No temporary is left behind.
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path)) files += e.path().string().find(".tmp") == std::string::npos;
+  CHECK(files == 5);
+}
+
+TEST_CASE("CAD read errors name the file") {
+  const TempDir dir;
+  auto message = [](const std::string& path) -> std::string {
+    try {
+      cad::read_cad(path);
+    } catch (const cad::CadError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string missing = dir / "missing.step";
+  CHECK(message(missing).find(missing) == 0);
+  CHECK(message(missing).find("no such file") != std::string::npos);
+
+  const std::string unknown = dir / "model.xyz";
+  std::ofstream(unknown) << "solid\n";
+  CHECK(message(unknown).find(unknown) == 0);
+  CHECK(message(unknown).find("unsupported") != std::string::npos);
+
+  for (const std::string name : {"garbage.step", "garbage.iges", "garbage.brep"}) {
+    const std::string path = dir / name;
+    std::ofstream(path) << "this is not a CAD file\n" << std::string(200, 'x') << "\n";
+    const std::string msg = message(path);
+    CAPTURE(msg);
+    CHECK(msg.find(path) == 0);
+  }
+  const std::string empty = dir / "empty.brep";
+  std::ofstream(empty).close();
+  CHECK(message(empty).find(empty) == 0);
+  CHECK(message(empty).find("empty") != std::string::npos);
+
+  // A well-formed STEP file without any shape.
+  const std::string no_shape = dir / "no_shape.step";
+  std::ofstream(no_shape) << "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n"
+                             "FILE_NAME('x','2024-01-01T00:00:00',(''),(''),'','','');\n"
+                             "FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\nENDSEC;\nDATA;\nENDSEC;\n"
+                             "END-ISO-10303-21;\n";
+  CHECK(message(no_shape).find(no_shape) == 0);
+
+  const std::string directory = dir / "dir.brep";
+  std::filesystem::create_directories(directory);
+  CHECK(message(directory).find(directory) == 0);
+  CHECK_THROWS_AS(cad::cad_format("a.stl"), cad::CadError);
+  CHECK(cad::cad_format("A.StP") == cad::CadFormat::step);
+  CHECK(cad::cad_format("a.IGS") == cad::CadFormat::iges);
+}
+
+TEST_CASE("meshing the cube with a cavity: every boundary node on the CAD") {
+  const auto m = cad::cube_with_cavity_model();
+  cad::CadMeshOptions o;
+  o.size = 1.62;
+  for (int v = 1; v <= m.num_vertices(); ++v)
+    o.vertex_sizes[v] = (m.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
+  const auto mesh = cad::mesh_cad<Simplex<3>>(m, o);
+  CHECK(mesh.num_elements() > 1200);
+  CHECK(mesh.num_elements() < 1700);
+  const auto g = m.geometry_model();
+  const int sphere = face_of_type(m, "sphere");
+  int on[3] = {0, 0, 0};
+  std::set<int> faces_seen;
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    const auto& c = mesh.node_class(i);
+    if (c.kind == NodeKind::free) continue;
+    REQUIRE(c.entity);
+    const Eigen::Vector3d x = mesh.node(i);
+    ++on[c.entity->dim];
+    if (c.entity->dim == 0) {
+      CHECK(c.kind == NodeKind::fixed);
+      CHECK((m.vertex(c.entity->tag) - x).norm() < 1e-8);
+    } else if (c.entity->dim == 1) {
+      REQUIRE(c.num_params == 1);
+      CHECK((g.curve(c.entity->tag)->evaluate(c.params[0]) - x).norm() < 1e-8);
+    } else {
+      REQUIRE(c.entity->dim == 2);
+      REQUIRE(c.num_params == 2);
+      CHECK((g.surface(c.entity->tag)->evaluate({c.params[0], c.params[1]}) - x).norm() < 1e-8);
+      CHECK(m.surface(c.entity->tag).contains({c.params[0], c.params[1]}));
+      faces_seen.insert(c.entity->tag);
+      if (c.entity->tag == sphere) CHECK((x - Eigen::Vector3d::Constant(2.5)).norm() == doctest::Approx(0.5));
+    }
+  }
+  CHECK(on[0] == m.num_vertices());
+  CHECK(on[1] > 0);
+  CHECK(int(faces_seen.size()) == 7);
+  // Boundary facets carry the model's face tags; nodes of a facet lie on
+  // that face or its edges / vertices.
+  CHECK(!mesh.boundary_facets().empty());
+  for (const auto& f : mesh.boundary_facets()) {
+    CHECK(f.entity_tag >= 1);
+    CHECK(f.entity_tag <= 7);
+    for (int v : f.vertices) {
+      const auto& c = mesh.node_class(v);
+      if (c.entity->dim == 2) CHECK(c.entity->tag == f.entity_tag);
+      if (c.entity->dim == 1) {
+        const auto ef = m.edge_faces(c.entity->tag);
+        CHECK(std::find(ef.begin(), ef.end(), f.entity_tag) != ef.end());
+      }
+    }
+  }
+  for (int e = 0; e < mesh.num_elements(); ++e) CHECK(mesh.element_entities()[e] == 1);
+
+  // Classifying the same mesh by projection (as a user-supplied mesh) gives
+  // the same entities and points.
+  auto copy = mesh;
+  for (auto& c : copy.node_classes()) c = NodeClass{};
+  copy.boundary_facets().clear();
+  cad::classify(copy, m, 1e-8);
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    const auto& a = mesh.node_class(i);
+    const auto& b = copy.node_class(i);
+    if (a.kind == NodeKind::free) {
+      CHECK(b.kind == NodeKind::free);
+      continue;
+    }
+    CHECK(a.kind == b.kind);
+    CHECK(a.entity == b.entity);
+    if (b.entity->dim == 2)
+      CHECK((m.surface(b.entity->tag).evaluate({b.params[0], b.params[1]}) - copy.node(i)).norm() < 1e-8);
+    if (b.entity->dim == 1) CHECK((m.curve(b.entity->tag).evaluate(b.params[0]) - copy.node(i)).norm() < 1e-8);
+  }
+  REQUIRE(copy.boundary_facets().size() == mesh.boundary_facets().size());
+  std::multiset<int> fa, fb;
+  for (const auto& f : mesh.boundary_facets()) fa.insert(f.entity_tag);
+  for (const auto& f : copy.boundary_facets()) fb.insert(f.entity_tag);
+  CHECK(fa == fb);
+
+  // A boundary node moved off the model is an error that names it.
+  int moved = -1;
+  for (int i = 0; i < copy.num_nodes() && moved < 0; ++i)
+    if (copy.node_class(i).kind != NodeKind::free) moved = i;
+  copy.node(moved) += Eigen::Vector3d(1e-3, 2e-3, -1e-3);
+  try {
+    cad::classify(copy, m, 1e-8);
+    FAIL("classify accepted a node off the model");
+  } catch (const cad::MeshingError& e) {
+    CHECK(std::string(e.what()).find("node " + std::to_string(moved)) != std::string::npos);
+  }
+}
+
+TEST_CASE("surface meshes of the NURBS sphere: triangles and quadrilaterals on the patches") {
+  const Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  const auto m = cad::nurbs_sphere_model(c, 0.5);
+  cad::CadMeshOptions o;
+  o.size = 0.15;
+  auto check = [&](const auto& mesh) {
+    CHECK(mesh.num_elements() > 50);
+    for (int i = 0; i < mesh.num_nodes(); ++i) {
+      const auto& cl = mesh.node_class(i);
+      REQUIRE(cl.entity);
+      CHECK(cl.kind != NodeKind::free);
+      const Eigen::Vector3d x = mesh.node(i);
+      CHECK(x.norm() == doctest::Approx(0.5).epsilon(1e-12));
+      if (cl.entity->dim == 2) {
+        REQUIRE(cl.num_params == 2);
+        CHECK((m.surface(cl.entity->tag).evaluate({cl.params[0], cl.params[1]}) - x).norm() < 1e-8);
+      }
+    }
+    std::set<int> faces(mesh.element_entities().begin(), mesh.element_entities().end());
+    CHECK(faces == std::set<int>{1, 2, 3, 4, 5, 6, 7, 8});
+  };
+  check(cad::mesh_cad<Simplex<2>, WarpBlend, 3>(m, o));
+  check(cad::mesh_cad<Cube<2>, GaussLobatto, 3>(m, o));
+}
+
+TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
+  const auto dir = shared_cad_dir();
+  if (!std::filesystem::exists(dir / "README.md")) {
+    MESSAGE("no " << dir.string() << ": skipped");
+    return;
+  }
+  struct Expect {
+    const char* file;
+    int solids, faces;
+  };
+  for (const Expect& x : {Expect{"wing_fuselage.step", 2, 16}, Expect{"spur_gear_10t.step", 1, 128},
+                          Expect{"ring_in_sphere.brep", 2, 13}, Expect{"gear_face_2d.brep", 0, 1},
+                          Expect{"t106_turbine_cascade.step", 0, 8}}) {
+    CAPTURE(x.file);
+    const auto m = cad::read_cad((dir / x.file).string());
+    CHECK(m.num_solids() == x.solids);
+    CHECK(m.num_faces() == x.faces);
+    // Every face's surface passes through its own sample points.
+    std::mt19937 rng(2);
+    for (int f = 1; f <= m.num_faces(); ++f) {
+      const auto s = m.surface(f);
+      const Eigen::Vector2d uv = random_uv(s, rng, 0.1);
+      CHECK((s.evaluate(s.project(s.evaluate(uv))) - s.evaluate(uv)).norm() <= 1e-7 * m.size());
+    }
+  }
+  const auto sphere = cad::read_cad((dir / "sphere_nurbs_8patch_rhino.igs").string());
+  CHECK(sphere.num_faces() >= 1);
+  for (int f = 1; f <= sphere.num_faces(); ++f) {
+    std::mt19937 rng(4);
+    const auto s = sphere.surface(f);
+    for (int i = 0; i < 10; ++i) CHECK(s.evaluate(random_uv(s, rng)).norm() == doctest::Approx(1.0).epsilon(1e-6));
+  }
+}
