@@ -108,6 +108,50 @@ out=$("$hom" quality "$work/folded_surface.msh" --json "$work/f.json"); rc=$?
 [[ $rc -eq 3 ]] || fail "folded surface mesh: exit $rc, expected 3"
 grep -q '"inverted": 1' "$work/f.json" || fail "folded surface json: expected 1 inverted"
 
+# --certify: a cubic quadrilateral folded between its quadrature points. The
+# map is x = xi^3/3 - e xi, y = eta (e = 0.0289), so det = xi^2 - e < 0 only for
+# |xi| < 0.17, between the 4 Gauss points per axis at |xi| = 0.34, 0.86 and the
+# nodes at |xi| = 1/3: the quadrature check calls it valid, certification must not.
+write_fold() {  # $1 = file; nodes in Gmsh's 16-node quadrilateral order
+  awk -v e=0.0289 'function f(s) { return s * s * s / 3 - e * s }
+    BEGIN {
+      split("-1 1 1 -1 -1/3 1/3 1 1 1/3 -1/3 -1 -1 -1/3 1/3 1/3 -1/3", X, " ")
+      split("-1 -1 1 1 -1 -1 -1/3 1/3 1 1 1/3 -1/3 -1/3 -1/3 1/3 1/3", Y, " ")
+      print "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 16 1 16\n2 1 0 16"
+      for (i = 1; i <= 16; ++i) print i
+      for (i = 1; i <= 16; ++i) {
+        split(X[i], a, "/"); x = a[1] / (a[2] ? a[2] : 1)
+        split(Y[i], b, "/"); y = b[1] / (b[2] ? b[2] : 1)
+        printf "%.17g %.17g 0\n", f(x), y
+      }
+      print "$EndNodes\n$Elements\n1 1 1 1\n2 1 36 1"
+      printf "1"; for (i = 1; i <= 16; ++i) printf " %d", i; print ""
+      print "$EndElements"
+    }' > "$1"
+}
+write_fold "$work/fold.msh"
+out=$("$hom" quality "$work/fold.msh"); rc=$?
+[[ $rc -eq 0 ]] || fail "fold: the quadrature check should call it valid (exit $rc): $out"
+out=$("$hom" quality "$work/fold.msh" --certify --json "$work/fold.json" --vtu "$work/fold.vtu"); rc=$?
+[[ $rc -eq 3 ]] || fail "fold --certify: exit $rc, expected 3: $out"
+grep -q "0 certified valid, 1 certified invalid, 0 undecided" <<<"$out" || fail "fold --certify: counts: $out"
+grep -q '"certified_invalid": 1' "$work/fold.json" || fail "fold json: certified_invalid != 1"
+grep -q '"certified_valid": 0' "$work/fold.json" || fail "fold json: certified_valid != 0"
+grep -Eq '"certified_min_scaled_jacobian": -' "$work/fold.json" || fail "fold json: certified bound not negative"
+grep -q 'Name="certificate"' "$work/fold.vtu" || fail "fold vtu: no certificate array"
+# The fold is the strip |xi| < 0.17, i.e. |x| <= |f(0.17)| = 0.0033: the reported point lies in it.
+pt=$(grep -o "det = [^ ]* <= 0 at ([^,]*" <<<"$out" | sed 's/.*(//')
+awk -v x="$pt" 'BEGIN { exit !(x != "" && x * x < 0.0034 * 0.0034) }' || fail "fold: invalid point '$pt' outside the fold"
+# Valid curved and straight meshes are certified valid; the tangled one invalid.
+out=$("$hom" quality "$work/valid3.msh" --certify --json "$work/vc.json"); rc=$?
+[[ $rc -eq 0 ]] || fail "valid --certify: exit $rc: $out"
+grep -q '"certified_valid": 2' "$work/vc.json" || fail "valid json: certified_valid != 2"
+grep -q '"undecided": 0' "$work/vc.json" || fail "valid json: undecided != 0"
+out=$("$hom" quality "$work/tangled2.msh" --certify --json "$work/tc.json"); rc=$?
+[[ $rc -eq 3 ]] || fail "tangled --certify: exit $rc"
+grep -q '"certified_invalid": 1' "$work/tc.json" || fail "tangled json: certified_invalid != 1"
+"$hom" quality "$work/valid.msh" --certify --certify-depth -1 >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --certify-depth"
+
 # Bad input: truncated file -> exit 1, message names the file, no output file.
 head -n 12 "$work/valid.msh" > "$work/truncated.msh"
 err=$("$hom" quality "$work/truncated.msh" --json "$work/x.json" 2>&1 >/dev/null); rc=$?

@@ -1,5 +1,6 @@
 // hom quality MESH [--measure shape|oddy] [--ideal straight|equilateral]
-//                  [--quadrature default|thesis] [--vtu OUT.vtu] [--json FILE]
+//                  [--quadrature default|thesis] [--certify [--certify-depth N]]
+//                  [--vtu OUT.vtu] [--json FILE]
 //
 // Validates a high-order mesh (chapter 3): prints the thesis's statistics
 // table of the element quality q_E (definition 3.6) and of the scaled
@@ -13,6 +14,10 @@
 // where its curved tangent plane turns over with respect to the normal of its
 // own straight-sided facet (no geometry is needed, so an element whose facet
 // itself is flipped with respect to its neighbours is not detected).
+//
+// --certify (planar and volume meshes) adds the certificate of
+// quality/certify.hpp: the sign of det D phi_P everywhere in each element from
+// Bernstein bounds with adaptive subdivision, not only at quadrature points.
 
 #include <cstdio>
 #include <iostream>
@@ -24,6 +29,7 @@
 #include "hom/io/report.hpp"
 #include "hom/measure/oddy_measure.hpp"
 #include "hom/measure/shape_measure.hpp"
+#include "hom/quality/certify.hpp"
 #include "hom/quality/mesh_quality.hpp"
 #include "hom/surface/surface_mesh_quality.hpp"
 #include "mesh_io.hpp"
@@ -40,6 +46,8 @@ struct QualityOptions {
   std::string quadrature = "default";
   std::string vtu;
   std::string json;
+  bool certify = false;
+  int certify_depth = hom::CertifyOptions{}.max_depth;
 };
 
 void print_row(const char* label, const hom::Statistics& s) {
@@ -73,6 +81,46 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
   std::printf("\nmesh quality q_M = %.6f (eq 3.26%s); %s\n", q.mesh_quality, surface ? ", defs. 5.1-5.2" : "",
               q.inverted() ? "INVALID: some elements have det <= 0 at a quadrature point" : "valid at every quadrature point");
 
+  // Certificate (planar and volume meshes): sign of det everywhere in each element.
+  std::vector<double> status;
+  hom::io::Json::Object certified;  // the certificate's JSON keys
+  bool certified_ok = true;
+  if (o.certify) {
+    if constexpr (surface) {
+      std::printf("\n--certify: certification covers planar and volume meshes; skipped for this surface mesh\n");
+    } else {
+      hom::CertifyOptions co;
+      co.max_depth = o.certify_depth;
+      const auto c = hom::certify_mesh(mesh, co);
+      std::printf("\ncertified (Bernstein bounds of det D phi_P, subdivision depth <= %d, deepest used %d):\n",
+                  co.max_depth, c.max_depth);
+      std::printf("  %d certified valid, %d certified invalid, %d undecided; certified min scaled Jacobian >= %.4f\n",
+                  c.valid, c.invalid, c.undecided, c.min_scaled_jacobian);
+      int shown = 0;
+      for (int e = 0; e < mesh.num_elements() && shown < 5; ++e) {
+        const auto& ec = c.elements[e];
+        if (ec.status == hom::Certificate::certified_valid) continue;
+        ++shown;
+        if (ec.invalid_point) {
+          const auto x = mesh.map(e, *ec.invalid_point);
+          std::printf("  element %d: det = %.3g <= 0 at (", e, ec.invalid_value);
+          for (int a = 0; a < x.size(); ++a) std::printf(a ? ", %.6g" : "%.6g", x[a]);
+          std::printf(")\n");
+        } else {
+          std::printf("  element %d: undecided (det bounds [%.3g, %.3g] at depth %d)\n", e, ec.min_det_bound,
+                      ec.max_det_bound, ec.depth);
+        }
+      }
+      certified_ok = c.invalid == 0 && c.undecided == 0;
+      status = c.status_codes();
+      certified = {{"certified_valid", c.valid},
+                   {"certified_invalid", c.invalid},
+                   {"undecided", c.undecided},
+                   {"certified_min_scaled_jacobian", c.min_scaled_jacobian},
+                   {"certify_max_depth", co.max_depth}};
+    }
+  }
+
   if (!o.vtu.empty()) {
     std::vector<double> inverted, sjac;
     for (const auto& e : q.elements) {
@@ -86,8 +134,11 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
       nodal = hom::surface_nodal_mesh_quality(mesh, measure, ideal, rule);
     else
       nodal = hom::nodal_mesh_quality(mesh, measure, ideal, rule);
-    hom::io::write_vtu(o.vtu, mesh, {{"pointwise_quality", 1, std::move(nodal)}},
-                       {{"quality", 1, q.qualities()}, {"scaled_jacobian", 1, sjac}, {"inverted", 1, inverted}}, vo);
+    std::vector<hom::io::VtuField> cells{
+        {"quality", 1, q.qualities()}, {"scaled_jacobian", 1, sjac}, {"inverted", 1, inverted}};
+    // 0 certified valid, 1 undecided, 2 certified invalid (hom::status_code).
+    if (!status.empty()) cells.push_back({"certificate", 1, status});
+    hom::io::write_vtu(o.vtu, mesh, {{"pointwise_quality", 1, std::move(nodal)}}, cells, vo);
     std::printf("wrote %s\n", o.vtu.c_str());
   }
   if (!o.json.empty()) {
@@ -95,9 +146,10 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
                           "input", std::string(Measure::name), ideal_name};
     auto c = hom::io::quality_case(h, qs, sj);
     c.set("mesh_quality", q.mesh_quality).set("quadrature_exactness", rule.exactness).set("surface", surface);
+    for (auto& [k, v] : certified) c.set(k, std::move(v));
     hom::io::write_report(o.json, "hom quality", HOM_VERSION, {std::move(c)});
   }
-  return q.inverted() ? 3 : 0;
+  return q.inverted() || !certified_ok ? 3 : 0;
 }
 
 int run(int argc, char** argv) {
@@ -106,13 +158,19 @@ int run(int argc, char** argv) {
       "hom quality MESH [options]\n\n"
       "Validate a high-order mesh: element quality q_E (thesis def. 3.6) and scaled Jacobian\n"
       "statistics. Surface meshes (triangles/quadrilaterals in 3D) use the surface measure of\n"
-      "chapter 5 (defs. 5.1-5.2). Exit status 0 when every element is valid, 3 when some are invalid.\n\noptions");
+      "chapter 5 (defs. 5.1-5.2). Exit status 0 when every element is valid, 3 when some are invalid\n"
+      "(with --certify: also when some element is certified invalid or undecided).\n\noptions");
   opts.add_options()("help,h", "show this help")                                                       //
       ("measure", po::value(&o.measure)->default_value("shape"), "distortion measure: shape | oddy")  //
       ("ideal", po::value(&o.ideal)->default_value("straight"),
        "ideal element: straight (each element's straight-sided counterpart) | equilateral")  //
       ("quadrature", po::value(&o.quadrature)->default_value("default"),
        "quadrature: default | thesis (exact to degree 6p-3)")                                   //
+      ("certify", po::bool_switch(&o.certify),
+       "certify the sign of det everywhere in each element (Bernstein bounds, adaptive subdivision): "
+       "#certified valid / invalid / undecided and a certified lower bound of the scaled Jacobian")  //
+      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
+       "subdivision levels (2^dim pieces each) before an element is reported undecided")  //
       ("vtu", po::value(&o.vtu), "write a VTU colored by quality (ParaView)")                    //
       ("json", po::value(&o.json), "write the statistics as JSON");
   po::variables_map vm;
@@ -127,6 +185,8 @@ int run(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     throw hom::tools::UsageError(std::string("quality: ") + e.what());
   }
+  if (o.certify_depth < 0 || o.certify_depth > 20)
+    throw hom::tools::UsageError("quality: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu"))
     throw hom::tools::UsageError("quality: --vtu file name must end in .vtu");
 

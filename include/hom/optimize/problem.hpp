@@ -635,11 +635,17 @@ class OptimizationProblem {
 
   int num_points() const { return tab_->num_points(); }
 
-  /// Elements per block of the blocked kernels: up to 128, fewer for large
+  /// Elements per block of the blocked kernels (dense products): up to 128, fewer for large
   /// elements (the block's products JP = Xb G take Dim x block x Dim n_q
   /// numbers). Large blocks amortize the packing of the shared tabulation G
   /// that every product repeats (13% of the time at p = 10 with 57-element blocks).
-  int block_size() const { return std::clamp(65536 / std::max(1, nodes_per_element()), 16, 128); }
+  int block_size() const {
+    // Sum factorization has no shared matrix to amortize, and small blocks keep
+    // JP and P (Dim x block x Dim n_q) in cache for the point loops: 8 elements
+    // were 10-20% faster than 128 at p = 10 (bench_kernel, one thread).
+    if (use_sum_factorization()) return 8;
+    return std::clamp(65536 / std::max(1, nodes_per_element()), 16, 128);
+  }
 
   static NodeMatrix point_jacobian(const Eigen::MatrixXd& JP, int b, int q, const Ideal& id) {
     return JP.template block<dim, dim>(dim * b, dim * q) * id.inverse_jacobian[q];
