@@ -1,0 +1,400 @@
+/// @file bench_curve.cpp
+/// Chapter 6's a posteriori pipeline (src/curve/curve_mesh.hpp) on the cases
+/// of issue 7, with the statistics of every stage (linear, initial curved,
+/// optimized; surface and volume / planar):
+///
+///   cube_cavity    the cube with a spherical cavity (section 4.3.1) meshed
+///                  with tetrahedra, p = 2..5; beside p = 4: table 6.2 (the
+///                  thesis's degree-4 tetrahedral Falcon mesh);
+///   nurbs_sphere   the sphere of 8 rational B-spline octants (6.3.3.1),
+///                  surface triangles, p = 4;
+///   plate_tri      a planar part with holes and fillets (curve_models.hpp),
+///                  triangles, p = 7, beside table 6.1 (Barcelona harbor);
+///   plate_quad     the same part with quadrilaterals, p = 3 and 4, beside
+///                  table D.3 (motorbike brake components);
+///   gear           a gear-like extruded part, surface triangles at
+///                  p = 3, 5, 8 (10 with --p), beside tables 5.5 and 5.6;
+///   the real CAD files of ../shared/data/cad (relative to the repository
+///   root; skipped when absent) at p = 2..5 (the three volume files at
+///   p = 2, 3 by default, --p for more): wing_fuselage.step,
+///   ring_in_sphere.brep, spur_gear_10t.step (tetrahedra), gear_face_2d.brep
+///   (planar triangles and quadrilaterals), sphere_nurbs_8patch_rhino.igs and
+///   t106_turbine_cascade.step (surface triangles: no solid).
+///
+/// The thesis's meshes (a propeller, a Falcon, the Barcelona harbor, a gear
+/// box) are not public: its rows are printed beside hom's for scale, not as
+/// equal targets. Not done (listed in the report): the propeller-like part
+/// (table 5.3), the wing exterior domain (6.3.2).
+///
+/// Per case and stage: #elements, #nodes, #inverted, min / mean quality
+/// (shape measure, straight-sided ideal), min scaled Jacobian, time of the
+/// stage, peak memory. Output in --out (default results/curve): curve.csv,
+/// the JSON report (--json, default OUT/curve.json; one case per stage with
+/// "thesis" entries) and a VTU of every final mesh colored by quality.
+/// Options: --case NAME (repeatable; default all), --p LIST (overrides the
+/// degrees of the selected cases), --threads, --quick (CI-sized: fewer
+/// degrees, the real-CAD files at p = 2 only), --iterations-after-valid N
+/// (the volume / planar optimizer stops once the mesh has been valid N
+/// iterations; default 5 to keep the default run near 10 minutes on two
+/// cores; -1 optimizes to convergence as the thesis).
+///
+/// Exit status: 0 when every case gives a valid mesh, 1 when a case is
+/// invalid or fails (the error is printed and recorded), 2 on bad options.
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <boost/program_options.hpp>
+
+#include "cad_mesher.hpp"
+#include "cad_model.hpp"
+#include "curve_mesh.hpp"
+#include "curve_models.hpp"
+#include "harness.hpp"
+#include "hom/io/report.hpp"
+#include "hom/io/vtu.hpp"
+
+#ifndef HOM_VERSION
+#define HOM_VERSION "unknown"
+#endif
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+using hom::bench::fmt;
+
+namespace {
+
+enum class Kind { volume, surface_tri, surface_quad, planar_tri, planar_quad };
+
+/// A thesis row for comparison (Min, Mean, #inv; scaled Jacobian min, mean).
+struct ThesisRow {
+  std::string table;
+  double min_q, mean_q;
+  int inverted;
+  std::optional<double> min_sj, mean_sj;
+};
+
+struct Case {
+  std::string name;
+  std::function<hom::cad::CadModel()> model;
+  Kind kind;
+  std::function<hom::cad::CadMeshOptions(const hom::cad::CadModel&)> mesh_options;
+  std::vector<int> degrees, quick_degrees;
+  /// thesis rows by (p, stage)
+  std::map<std::pair<int, std::string>, ThesisRow> thesis;
+};
+
+struct Settings {
+  int threads = 0;
+  fs::path out = "results/curve";
+  bool quick = false;
+  int iterations_after_valid = 5;
+};
+
+const char* kind_name(Kind k) {
+  switch (k) {
+    case Kind::volume: return "tetrahedra";
+    case Kind::surface_tri: return "surface triangles";
+    case Kind::surface_quad: return "surface quadrilaterals";
+    case Kind::planar_tri: return "planar triangles";
+    case Kind::planar_quad: return "planar quadrilaterals";
+  }
+  return "";
+}
+
+class Runner {
+ public:
+  explicit Runner(Settings s) : s_(std::move(s)), checks_("bench_curve") {
+    csv_ << "case,model,family,p,part,stage,elements,nodes,min_q,max_q,mean_q,std_q,inverted,min_sj,mean_sj,time_s,"
+            "iterations,peak_rss_mb,thesis_table,thesis_min_q,thesis_mean_q,thesis_inverted,thesis_min_sj\n";
+  }
+
+  void run(const Case& c, const std::vector<int>& degrees) {
+    std::printf("\n== %s: %s\n", c.name.c_str(), kind_name(c.kind));
+    std::fflush(stdout);
+    try {
+      auto cad = c.model();
+      std::printf("   %s\n", cad.summary().c_str());
+      if (c.kind == Kind::planar_tri || c.kind == Kind::planar_quad) {
+        auto placed = hom::cad::place_in_xy_plane(cad);
+        if (!placed) throw std::runtime_error(cad.name() + ": not a planar model");
+        if (placed->moved) std::printf("   moved rigidly into z = 0\n");
+        cad = placed->model;
+      }
+      const auto mo = c.mesh_options(cad);
+      switch (c.kind) {
+        case Kind::volume: return curve_all<hom::Simplex<3>, 3>(c, cad, mo, degrees);
+        case Kind::surface_tri: return curve_all<hom::Simplex<2>, 3>(c, cad, mo, degrees);
+        case Kind::surface_quad: return curve_all<hom::Cube<2>, 3>(c, cad, mo, degrees);
+        case Kind::planar_tri: return curve_all<hom::Simplex<2>, 2>(c, cad, mo, degrees);
+        case Kind::planar_quad: return curve_all<hom::Cube<2>, 2>(c, cad, mo, degrees);
+      }
+    } catch (const std::exception& e) {
+      std::printf("   FAILED: %s\n", e.what());
+      checks_.expect(false, c.name + ": " + e.what());
+    }
+  }
+
+  int finish(const std::string& json) {
+    fs::create_directories(s_.out);
+    {
+      std::ofstream f(s_.out / "curve.csv");
+      f << csv_.str();
+    }
+    const std::string jpath = json.empty() ? (s_.out / "curve.json").string() : json;
+    hom::io::write_report(jpath, "bench_curve", HOM_VERSION, cases_, checks_.all());
+    std::printf("\nwrote %s, %s and the VTU files in %s\n", (s_.out / "curve.csv").string().c_str(), jpath.c_str(),
+                s_.out.string().c_str());
+    std::printf("%d checks, %zu failed\n", checks_.count(), checks_.failures().size());
+    for (const auto& f : checks_.failures()) std::printf("  FAILED: %s\n", f.c_str());
+    return checks_.failures().empty() ? 0 : 1;
+  }
+
+ private:
+  template <hom::ElementFamily F, int S>
+  void curve_all(const Case& c, const hom::cad::CadModel& cad, const hom::cad::CadMeshOptions& mo,
+                 const std::vector<int>& degrees) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
+    const double t_mesh = hom::bench::seconds_since(t0);
+    std::printf("   linear mesh: %d elements, %d nodes (Gmsh, %.2f s)\n", linear.num_elements(), linear.num_nodes(),
+                t_mesh);
+    for (int p : degrees) {
+      hom::cad::CurveOptions o;
+      o.p = p;
+      o.threads = s_.threads;
+      o.iterations_after_valid = s_.iterations_after_valid;
+      try {
+        auto r = hom::cad::curve_mesh<F, S>(cad, linear, o);
+        report(c, cad, std::string(F::name), p, r.stages, t_mesh);
+        int corners = 0;
+        for (double sj : r.element_scaled_jacobian) corners += !(sj > 0.0);
+        if (corners > 0) std::printf("   %d elements with det <= 0 at a node\n", corners);
+        const std::string claim = c.name + " p = " + std::to_string(p) +
+                                  ": valid (0 inverted at quadrature points, det > 0 at the nodes, boundary on the CAD)";
+        if (!r.conformity.ok) std::printf("   %s\n", r.conformity.problem.c_str());
+        int folded = 0;  // det <= 0 at a node (>= 0 allowed on surfaces: poles), as `hom curve`
+        for (double sj : r.element_scaled_jacobian) folded += S == F::dim ? !(sj > 0.0) : !(sj >= 0.0);
+        checks_.expect(r.valid && folded == 0, claim);
+        std::vector<double> inverted;
+        for (bool v : r.element_valid) inverted.push_back(v ? 0.0 : 1.0);
+        hom::io::VtuOptions vo;
+        vo.interpolate_point_data = false;
+        fs::create_directories(s_.out);
+        hom::io::write_vtu((s_.out / (c.name + "_p" + std::to_string(p) + ".vtu")).string(), r.mesh, {},
+                           {{"quality", 1, r.element_quality},
+                            {"scaled_jacobian", 1, r.element_scaled_jacobian},
+                            {"inverted", 1, inverted}},
+                           vo);
+      } catch (const std::exception& e) {
+        std::printf("   p = %d FAILED: %s\n", p, e.what());
+        checks_.expect(false, c.name + " p = " + std::to_string(p) + ": " + e.what());
+      }
+    }
+  }
+
+  void report(const Case& c, const hom::cad::CadModel& cad, const std::string& family, int p,
+              const std::vector<hom::cad::StageReport>& stages, double t_mesh) {
+    const double rss = hom::bench::peak_rss_mb();
+    std::printf("   p = %d\n   %-8s %-10s %8s %8s %6s %6s %6s %5s %7s %8s   %s\n", p, "part", "stage", "elements",
+                "nodes", "Min", "Max", "Mean", "#inv", "min SJ", "time s", "thesis (Min Mean #inv [min SJ])");
+    for (const auto& s : stages) {
+      const double t = s.stage == "linear" ? s.time_s + t_mesh : s.time_s;
+      std::optional<ThesisRow> th;
+      if (auto it = c.thesis.find({p, s.part + ":" + s.stage}); it != c.thesis.end()) th = it->second;
+      std::string thesis_text;
+      if (th)
+        thesis_text = th->table + ": " + fmt(th->min_q) + " " + fmt(th->mean_q) + " " + std::to_string(th->inverted) +
+                      (th->min_sj ? " [" + fmt(*th->min_sj) + "]" : "");
+      std::printf("   %-8s %-10s %8d %8d %6.3f %6.3f %6.3f %5d %7.3f %8.2f   %s\n", s.part.c_str(), s.stage.c_str(),
+                  s.elements, s.nodes, s.quality.min, s.quality.max, s.quality.mean, s.quality.inverted,
+                  s.scaled_jacobian.min, t, thesis_text.c_str());
+      csv_ << c.name << ',' << cad.name() << ',' << family << ',' << p << ',' << s.part << ',' << s.stage << ','
+           << s.elements << ',' << s.nodes << ',' << s.quality.min << ',' << s.quality.max << ',' << s.quality.mean
+           << ',' << s.quality.std_dev << ',' << s.quality.inverted << ',' << s.scaled_jacobian.min << ','
+           << s.scaled_jacobian.mean << ',' << t << ',' << s.iterations << ',' << rss << ','
+           << (th ? th->table : "") << ',' << (th ? fmt(th->min_q) : "") << ',' << (th ? fmt(th->mean_q) : "") << ','
+           << (th ? std::to_string(th->inverted) : "") << ',' << (th && th->min_sj ? fmt(*th->min_sj) : "") << '\n';
+      const std::string fam = s.part == "surface" && c.kind == Kind::volume ? "triangle" : family;
+      hom::io::CaseHeader h{c.name, fam, p, s.elements, s.nodes, s.stage, "shape", "straight-sided"};
+      auto j = hom::io::quality_case(h, s.quality, s.scaled_jacobian);
+      j.set("part", s.part)
+          .set("model", cad.name())
+          .set("time_s", t)
+          .set("iterations", s.iterations)
+          .set("peak_rss_mb", rss)
+          .set("threads", s_.threads);
+      if (!s.solver.empty()) j.set("solver", s.solver).set("stop_reason", s.stop_reason);
+      if (th) {
+        auto t_json = hom::io::Json::object();
+        t_json.set("table", th->table).set("min_q", th->min_q).set("mean_q", th->mean_q).set("inverted", th->inverted);
+        if (th->min_sj) t_json.set("min_scaled_jacobian", *th->min_sj);
+        if (th->mean_sj) t_json.set("mean_scaled_jacobian", *th->mean_sj);
+        j.set("thesis", t_json);
+      }
+      cases_.push_back(std::move(j));
+    }
+    std::fflush(stdout);
+  }
+
+  Settings s_;
+  hom::bench::Checks checks_;
+  std::ostringstream csv_;
+  std::vector<hom::io::Json> cases_;
+};
+
+hom::cad::CadMeshOptions sized(double size, int curvature = 0) {
+  hom::cad::CadMeshOptions o;
+  o.size = size;
+  o.size_from_curvature = curvature;
+  return o;
+}
+
+std::vector<Case> all_cases(const fs::path& data) {
+  std::vector<Case> cases;
+  // Cube with a cavity: graded towards the sphere as bench_untangle's mesh.
+  {
+    Case c{"cube_cavity", [] { return hom::cad::cube_with_cavity_model(); }, Kind::volume,
+           [](const hom::cad::CadModel& m) {
+             hom::cad::CadMeshOptions o;
+             o.size = 1.62;
+             for (int v = 1; v <= m.num_vertices(); ++v)
+               o.vertex_sizes[v] = (m.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
+             return o;
+           },
+           {2, 3, 4, 5}, {2, 3}, {}};
+    c.thesis[{4, "volume:linear"}] = {"6.2", 1.00, 1.00, 0, {}, {}};
+    c.thesis[{4, "volume:initial"}] = {"6.2", 0.00, 0.99, 12, {}, {}};
+    c.thesis[{4, "volume:optimized"}] = {"6.2", 0.31, 0.99, 0, {}, {}};
+    cases.push_back(c);
+  }
+  cases.push_back({"nurbs_sphere", [] { return hom::cad::nurbs_sphere_model(); }, Kind::surface_tri,
+                   [](const hom::cad::CadModel&) { return sized(0.12); }, {4}, {4}, {}});
+  {
+    Case c{"plate_tri", [] { return hom::cad::plate_with_holes_model(); }, Kind::planar_tri,
+           [](const hom::cad::CadModel&) { return sized(0.8); }, {7}, {4}, {}};
+    c.thesis[{7, "planar:initial"}] = {"6.1", 0.00, 0.91, 3, {}, {}};
+    c.thesis[{7, "planar:optimized"}] = {"6.1", 0.52, 0.92, 0, {}, {}};
+    cases.push_back(c);
+  }
+  {
+    Case c{"plate_quad", [] { return hom::cad::plate_with_holes_model(); }, Kind::planar_quad,
+           [](const hom::cad::CadModel&) { return sized(0.8); }, {3, 4}, {3}, {}};
+    c.thesis[{3, "planar:initial"}] = {"D.3 (a)", 0.00, 0.92, 3, {}, {}};
+    c.thesis[{3, "planar:optimized"}] = {"D.3 (b)", 0.67, 0.94, 0, {}, {}};
+    c.thesis[{4, "planar:initial"}] = {"D.3 (c)", 0.00, 0.78, 8, {}, {}};
+    c.thesis[{4, "planar:optimized"}] = {"D.3 (d)", 0.62, 0.83, 0, {}, {}};
+    cases.push_back(c);
+  }
+  {
+    Case c{"gear", [] { return hom::cad::gear_model(); }, Kind::surface_tri,
+           [](const hom::cad::CadModel&) { return sized(0.12); }, {3, 5, 8}, {3}, {}};
+    const std::map<int, std::pair<ThesisRow, ThesisRow>> t55 = {
+        {3, {{"5.5", 0.00, 0.98, 10, {}, {}}, {"5.5", 0.98, 1.00, 0, {}, {}}}},
+        {5, {{"5.5", 0.00, 0.95, 30, {}, {}}, {"5.5", 0.98, 1.00, 0, {}, {}}}},
+        {8, {{"5.5", 0.00, 0.86, 110, {}, {}}, {"5.5", 0.98, 1.00, 0, {}, {}}}},
+        {10, {{"5.5, 5.6", 0.00, 0.83, 130, -5.55, 0.36}, {"5.5, 5.6", 0.98, 1.00, 0, 0.26, 0.81}}}};
+    for (const auto& [p, rows] : t55) {
+      c.thesis[{p, "surface:initial"}] = rows.first;
+      c.thesis[{p, "surface:optimized"}] = rows.second;
+    }
+    cases.push_back(c);
+  }
+  // Real CAD (../shared/data/cad), default sizes (model size / 20) unless noted.
+  auto file = [data](const std::string& f) { return [path = (data / f).string()] { return hom::cad::read_cad(path); }; };
+  auto relative = [](double fraction, int curvature = 0) {
+    return [fraction, curvature](const hom::cad::CadModel& m) { return sized(fraction * m.size(), curvature); };
+  };
+  if (fs::exists(data / "README.md")) {
+    // Default degrees 2 and 3 keep the default run near ten minutes on two
+    // loaded cores; --p 2,3,4,5 runs the issue's full range (the volume
+    // cases then take several minutes each).
+    cases.push_back({"wing_fuselage", file("wing_fuselage.step"), Kind::volume, relative(0.05), {2, 3}, {2}, {}});
+    cases.push_back({"ring_in_sphere", file("ring_in_sphere.brep"), Kind::volume, relative(0.08), {2, 3}, {2}, {}});
+    cases.push_back({"spur_gear", file("spur_gear_10t.step"), Kind::volume, relative(0.05), {2, 3}, {2}, {}});
+    cases.push_back({"gear_face_tri", file("gear_face_2d.brep"), Kind::planar_tri, relative(0.04), {2, 3, 4, 5}, {2}, {}});
+    cases.push_back({"gear_face_quad", file("gear_face_2d.brep"), Kind::planar_quad, relative(0.04), {2, 3, 4, 5}, {2}, {}});
+    cases.push_back({"sphere_rhino", file("sphere_nurbs_8patch_rhino.igs"), Kind::surface_tri, relative(0.06),
+                     {2, 3, 4, 5}, {2}, {}});
+    cases.push_back({"t106_cascade", file("t106_turbine_cascade.step"), Kind::surface_tri, relative(0.05), {2, 3, 4, 5},
+                     {2}, {}});
+  } else {
+    std::printf("no %s: the real-CAD cases are skipped\n", data.string().c_str());
+  }
+  return cases;
+}
+
+std::vector<int> parse_degrees(const std::string& s) {
+  std::vector<int> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) out.push_back(std::stoi(item));
+  for (int p : out)
+    if (p < 2 || p > 15) throw std::invalid_argument("--p: degrees must be in 2..15");
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Settings s;
+  std::vector<std::string> names;
+  std::string degrees, json, data;
+  po::options_description desc(
+      "bench_curve [options]: chapter 6's a posteriori pipeline on the built-in cases and the real CAD\n"
+      "files of ../shared/data/cad (see the file comment)");
+  desc.add_options()("help,h", "show this help")                                                           //
+      ("case", po::value(&names)->composing(), "case to run (repeatable): cube_cavity, nurbs_sphere, plate_tri, "
+                                               "plate_quad, gear, wing_fuselage, ring_in_sphere, spur_gear, "
+                                               "gear_face_tri, gear_face_quad, sphere_rhino, t106_cascade")  //
+      ("p", po::value(&degrees), "degrees, comma-separated (overrides each case's own)")                   //
+      ("threads", po::value(&s.threads)->default_value(0), "threads (0: OpenMP's default)")                //
+      ("out", po::value<std::string>()->default_value("results/curve"), "output directory")                //
+      ("json", po::value(&json), "JSON report (default OUT/curve.json)")                                   //
+      ("data", po::value(&data)->default_value("../shared/data/cad"), "directory of the real CAD files")  //
+      ("quick", po::bool_switch(&s.quick), "CI-sized: fewer degrees per case")                             //
+      ("iterations-after-valid", po::value(&s.iterations_after_valid)->default_value(5),
+       "volume / planar stage: stop once valid this many iterations (-1: optimize to convergence)");
+  std::vector<int> forced;
+  try {
+    po::variables_map vm;
+    po::store(po::parse_command_line(argc, argv, desc), vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+      std::cout << desc << "\n";
+      return 0;
+    }
+    s.out = vm["out"].as<std::string>();
+    if (!degrees.empty()) forced = parse_degrees(degrees);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_curve: %s\n", e.what());
+    return 2;
+  }
+  std::printf("bench_curve %s: shape measure, straight-sided ideal, threads %d%s\n", HOM_VERSION, s.threads,
+              s.quick ? ", quick" : "");
+  const auto cases = all_cases(data);
+  for (const auto& n : names) {
+    bool known = false;
+    for (const auto& c : cases) known = known || c.name == n;
+    if (!known) {
+      std::fprintf(stderr, "bench_curve: unknown case '%s' (or its CAD file is missing)\n", n.c_str());
+      return 2;
+    }
+  }
+  Runner runner(s);
+  const auto start = std::chrono::steady_clock::now();
+  for (const auto& c : cases) {
+    if (!names.empty() && std::find(names.begin(), names.end(), c.name) == names.end()) continue;
+    runner.run(c, !forced.empty() ? forced : s.quick ? c.quick_degrees : c.degrees);
+  }
+  std::printf("\ntotal %.1f s, peak memory %.0f MB\n", hom::bench::seconds_since(start), hom::bench::peak_rss_mb());
+  return runner.finish(json);
+}

@@ -1,0 +1,49 @@
+#pragma once
+/// @file curve_models.hpp
+/// CAD models built with OpenCASCADE in code for chapter 6's cases where the
+/// thesis's originals are not public (bench_curve, test_curve), and the
+/// placement of a planar model in the plane z = 0 that hom's planar meshes
+/// live in. Compiled in src/curve (hom_curve); this header needs only Eigen
+/// and hom's headers.
+///
+///   auto part = hom::cad::plate_with_holes_model();   // one planar face, z = 0
+///   auto gear = hom::cad::gear_model();                // extruded toothed wheel
+
+#include <optional>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "cad_model.hpp"
+
+namespace hom::cad {
+
+/// A planar bracket in z = 0 (the "Barcelona harbor" / motorbike brake style
+/// 2D case, thesis 6.3.1 and D.2): an L-shaped plate 10 x 8 with its convex
+/// corners rounded (fillet radius 1), its re-entrant corner rounded (0.8),
+/// three circular holes and a stadium-shaped slot. One face; its boundary has
+/// lines, circular arcs and full circles.
+CadModel plate_with_holes_model();
+
+/// A gear-like part (section 5.5.2.2's gear-box component): a wheel of
+/// `teeth` teeth, outer radius `radius`, tooth height 0.2 radius, thickness
+/// `thickness` along z, with a centre bore of radius 0.3 radius. The tooth
+/// profile is a smooth periodic B-spline through points of an involute-like
+/// tooth (flanks that widen towards the root, rounded tip and root), extruded
+/// along z: one B-spline extrusion face for the teeth, a cylinder for the
+/// bore, two planar faces with a B-spline and a circular boundary.
+CadModel gear_model(int teeth = 12, double radius = 1.0, double thickness = 0.4);
+
+/// If every face of the model is planar and they lie in one plane, the model
+/// moved rigidly into z = 0 with that plane's normal along +z (a no-op for a
+/// model already there) and the transformation's description; std::nullopt
+/// if the model is not planar.
+struct PlanarPlacement {
+  CadModel model;
+  bool moved = false;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< x_new = rotation * x + translation
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+std::optional<PlanarPlacement> place_in_xy_plane(const CadModel& cad, double tolerance = 1e-9);
+
+}  // namespace hom::cad

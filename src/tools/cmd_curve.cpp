@@ -1,0 +1,339 @@
+// hom curve [MODEL.step|.stp|.iges|.igs|.brep] [--mesh LINEAR.msh] [--p P (2)] [-o OUT.msh (curved.msh)]
+//           [--size H] [--size-curvature N] [--surface] [--quads]
+//           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
+//           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
+//
+// Chapter 6's a posteriori generation of a curved high-order mesh from CAD
+// (src/curve/curve_mesh.hpp): a linear mesh of the model (Gmsh with the
+// OpenCASCADE kernel, or the user's MSH file classified on the model by
+// projection), elevated to degree P straight-sided (the ideal), its CAD
+// edges' nodes at Gauss-Lobatto positions in arc length, its CAD faces'
+// nodes blended in parameter space and optimized on the surface (chapter 5),
+// the volume's interior nodes optimized (chapter 4). Without a model: the
+// built-in cube with a spherical cavity (thesis section 4.3.1).
+//
+// What is meshed: tetrahedra when the model has solids (unless --surface);
+// a planar model (all faces in one plane) gives a planar mesh in z = 0
+// (moved there if needed); other models a surface mesh. --quads asks for
+// quadrilaterals (surface and planar meshes).
+//
+// The result is checked before anything is written: every element valid at
+// every quadrature point (against its straight-sided ideal; surface elements
+// oriented by their CAD face) and det D phi > 0 at every node (>= 0 on
+// surfaces, whose normal vanishes at a pole), and every boundary node on its
+// CAD entity at its parameters. An invalid result writes nothing.
+//
+// Exit status: 0 valid mesh written; 3 the result is invalid (nothing
+// written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
+// options.
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <type_traits>
+
+#include <boost/program_options.hpp>
+
+#include "cad_mesher.hpp"
+#include "cad_model.hpp"
+#include "command.hpp"
+#include "curve_mesh.hpp"
+#include "curve_models.hpp"
+#include "hom/io/report.hpp"
+#include "hom/optimize/solve.hpp"
+#include "mesh_io.hpp"
+#include "options.hpp"
+
+namespace po = boost::program_options;
+
+namespace {
+
+struct CurveCli {
+  std::string model, mesh, out, vtu, json;
+  int p = 0;
+  double size = 0.0;
+  int size_curvature = 0;
+  bool surface = false;
+  bool quads = false;
+  std::string measure = "shape";
+  std::string solver = "auto";
+  std::string pcont = "auto";
+  int threads = 0;
+  double tolerance = 1e-6;
+  int iterations_after_valid = -1;
+  bool verbose = false;
+};
+
+double peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;
+}
+
+void print_table(const std::vector<hom::cad::StageReport>& stages) {
+  std::printf("\n  %-8s %-10s %8s %8s %7s %7s %7s %8s %5s %8s %8s\n", "part", "stage", "elements", "nodes", "Min", "Max",
+              "Mean", "Std.Dev.", "#inv", "min SJ", "time s");
+  for (const auto& s : stages)
+    std::printf("  %-8s %-10s %8d %8d %7.4f %7.4f %7.4f %8.4f %5d %8.4f %8.2f\n", s.part.c_str(), s.stage.c_str(),
+                s.elements, s.nodes, s.quality.min, s.quality.max, s.quality.mean, s.quality.std_dev, s.quality.inverted,
+                s.scaled_jacobian.min, s.time_s);
+  std::printf("\n");
+}
+
+template <class MeshT>
+int curve_and_write(const hom::cad::CadModel& cad, const MeshT& linear, const CurveCli& o, double t_linear) {
+  using F = typename MeshT::family;
+  constexpr int S = MeshT::space_dim;
+  hom::cad::CurveOptions co;
+  co.p = o.p;
+  co.measure = o.measure;
+  co.solver = o.solver;
+  co.pcont = o.pcont == "on"    ? hom::cad::CurveOptions::Continuation::on
+             : o.pcont == "off" ? hom::cad::CurveOptions::Continuation::off
+                                : hom::cad::CurveOptions::Continuation::automatic;
+  co.threads = o.threads;
+  co.iterations_after_valid = o.iterations_after_valid;
+  co.verbose = o.verbose;
+  co.progress = [](const std::string& line) {
+    std::printf("  %s\n", line.c_str());
+    std::fflush(stdout);
+  };
+  const std::string kind = MeshT::dim == 3 ? "volume" : S == 2 ? "planar" : "surface";
+  std::printf("linear %s mesh: %d %s elements, %d nodes (%.2f s)\n", kind.c_str(), linear.num_elements(),
+              std::string(F::name).c_str(), linear.num_nodes(), t_linear);
+  auto r = hom::cad::curve_mesh<F, S>(cad, linear, co);
+  if (!r.stages.empty()) r.stages.front().time_s += t_linear;
+  // det D phi is also sampled at the nodes (the scaled Jacobian): a
+  // negative value there is a fold that no quadrature point sees (typically
+  // an element corner on a curved boundary opened beyond 180 degrees); a
+  // zero one a corner of 180 degrees (two CAD edges meeting tangentially) or,
+  // on a surface, a pole where the surface normal vanishes (allowed there).
+  int folded_at_nodes = 0;
+  for (double sj : r.element_scaled_jacobian) folded_at_nodes += S == MeshT::dim ? !(sj > 0.0) : !(sj >= 0.0);
+  print_table(r.stages);
+  const double rss = peak_rss_mb();
+  std::printf("boundary on the CAD: %d nodes checked, largest distance %.3g\n", r.conformity.checked,
+              r.conformity.max_distance);
+  const bool valid = r.valid && folded_at_nodes == 0;
+  if (!valid) {
+    if (r.inverted > 0)
+      std::fprintf(stderr, "hom: curve: INVALID result: %d of %d elements inverted after optimization; nothing written\n",
+                   r.inverted, r.mesh.num_elements());
+    else if (!r.conformity.ok)
+      std::fprintf(stderr, "hom: curve: INVALID result: %s; nothing written\n", r.conformity.problem.c_str());
+    else
+      std::fprintf(stderr,
+                   "hom: curve: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
+                   "valid: a fold at an element corner); nothing written\n",
+                   folded_at_nodes);
+  } else {
+    std::printf("valid: every element valid at every quadrature point and node, every boundary node on its CAD entity\n");
+  }
+
+  auto json_cases = [&]() {
+    std::vector<hom::io::Json> cases;
+    for (const auto& s : r.stages) {
+      // The surface part of a volume mesh is its boundary triangles.
+      const std::string family = s.part == "surface" ? std::string(MeshT::dim == 3 ? "triangle" : F::name)
+                                                     : std::string(F::name);
+      hom::io::CaseHeader h{cad.name(), family, o.p, s.elements, s.nodes, s.stage, o.measure, "straight-sided"};
+      auto c = hom::io::quality_case(h, s.quality, s.scaled_jacobian);
+      c.set("part", s.part)
+          .set("time_s", s.time_s)
+          .set("iterations", s.iterations)
+          .set("peak_rss_mb", rss)
+          .set("threads", o.threads);
+      if (!s.solver.empty()) c.set("solver", s.solver).set("stop_reason", s.stop_reason);
+      if (s.part == "surface" && s.stage == "optimized") c.set("faces_not_converged", s.faces_not_converged);
+      if (s.stage == "optimized" && s.part != "surface") c.set("p_continuation", s.p_continuation);
+      cases.push_back(std::move(c));
+    }
+    if (!cases.empty())
+      cases.back()
+          .set("valid", valid)
+          .set("elements_folded_at_nodes", folded_at_nodes)
+          .set("max_cad_distance", r.conformity.max_distance)
+          .set("output", valid ? hom::io::Json(o.out) : hom::io::Json());
+    return cases;
+  };
+  if (!valid) {
+    // The report still says what happened (it is not the mesh).
+    if (!o.json.empty()) hom::io::write_report(o.json, "hom curve", HOM_VERSION, json_cases());
+    return 3;
+  }
+
+  auto mesh = std::move(r.mesh);
+  hom::cad::add_physical_groups(mesh);
+  auto data = hom::io::to_msh_data(mesh);
+  const double gap = hom::cad::add_cad_parameters(data, cad);
+  hom::io::write_msh_data(o.out, data, {});
+  std::printf("wrote %s (MSH 4.1, entities, physical groups and parametric coordinates; Gmsh's equispaced nodes of the "
+              "curved elements lie within %.2g of the CAD)\n",
+              o.out.c_str(), gap);
+  if (!o.vtu.empty()) {
+    std::vector<double> inverted;
+    for (bool v : r.element_valid) inverted.push_back(v ? 0.0 : 1.0);
+    hom::io::VtuOptions vo;
+    vo.interpolate_point_data = false;
+    hom::io::write_vtu(o.vtu, mesh, {hom::tools::node_kind_field(mesh)},
+                       {{"quality", 1, r.element_quality},
+                        {"scaled_jacobian", 1, r.element_scaled_jacobian},
+                        {"inverted", 1, inverted}},
+                       vo);
+    std::printf("wrote %s\n", o.vtu.c_str());
+  }
+  if (!o.json.empty()) {
+    hom::io::write_report(o.json, "hom curve", HOM_VERSION, json_cases());
+    std::printf("wrote %s\n", o.json.c_str());
+  }
+  return 0;
+}
+
+void check_options(const CurveCli& o) {
+  using hom::tools::UsageError;
+  using hom::tools::ends_with;
+  if (o.p < 2) throw UsageError("curve: need a degree --p >= 2");
+  if (o.p > 15) throw UsageError("curve: --p must be at most 15");
+  if (o.out.empty()) throw UsageError("curve: need an output file: -o OUT.msh");
+  if (!ends_with(o.out, ".msh")) throw UsageError("curve: -o file name must end in .msh, got '" + o.out + "'");
+  if (!o.vtu.empty() && !ends_with(o.vtu, ".vtu")) throw UsageError("curve: --vtu file name must end in .vtu");
+  if (!o.mesh.empty() && !ends_with(o.mesh, ".msh")) throw UsageError("curve: --mesh must be a .msh file, got '" + o.mesh + "'");
+  if (o.vtu == o.out || (!o.json.empty() && (o.json == o.out || o.json == o.vtu)))
+    throw UsageError("curve: -o, --vtu and --json must name different files");
+  if (o.measure != "shape" && o.measure != "oddy")
+    throw UsageError("curve: --measure must be shape or oddy, got '" + o.measure + "'");
+  if (o.solver != "auto") {
+    try {
+      hom::parse_solver_kind(o.solver);
+    } catch (const std::invalid_argument&) {
+      throw UsageError("curve: --solver must be newton, matrix-free, gauss-seidel or auto, got '" + o.solver + "'");
+    }
+  }
+  if (o.pcont != "auto" && o.pcont != "on" && o.pcont != "off")
+    throw UsageError("curve: --pcont must be auto, on or off, got '" + o.pcont + "'");
+  if (o.size < 0) throw UsageError("curve: --size must be positive");
+  if (o.size_curvature < 0) throw UsageError("curve: --size-curvature must be >= 0");
+  if (o.threads < 0) throw UsageError("curve: --threads must be >= 0 (0: OpenMP's default)");
+  if (!(o.tolerance > 0)) throw UsageError("curve: --tolerance must be positive");
+  if (o.mesh.empty() == false && (o.size > 0 || o.size_curvature > 0))
+    throw UsageError("curve: --size and --size-curvature apply to the built-in mesher, not to --mesh");
+}
+
+/// A user's planar mesh (2D elements in z = 0): classified as a surface mesh
+/// in 3D, the classification copied back.
+template <class MeshT>
+void classify_user_mesh(MeshT& mesh, const hom::cad::CadModel& cad, double tolerance) {
+  if constexpr (MeshT::space_dim == 3) {
+    hom::cad::classify(mesh, cad, tolerance);
+  } else {
+    using F = typename MeshT::family;
+    typename hom::Mesh<F, hom::WarpBlend, 3>::Coordinates X = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
+    X.topRows(2) = mesh.nodes();
+    hom::Mesh<F, hom::WarpBlend, 3> lifted(1, X, mesh.elements());
+    hom::cad::classify(lifted, cad, tolerance);
+    mesh.node_classes() = lifted.node_classes();
+    mesh.element_entities() = lifted.element_entities();
+    mesh.entities() = lifted.entities();
+    // Nodes inside the planar face move freely.
+    for (auto& c : mesh.node_classes())
+      if (c.entity && c.entity->dim == 2) c.kind = hom::NodeKind::free;
+  }
+}
+
+int run(int argc, char** argv) {
+  CurveCli o;
+  po::options_description opts(
+      "hom curve [MODEL.step|.iges|.brep] [--mesh LINEAR.msh] [--p P] [-o OUT.msh] [options]\n\n"
+      "Generate a curved high-order mesh from CAD (thesis chapter 6): a linear mesh of the model\n"
+      "(Gmsh, or --mesh), elevated to degree P, boundary nodes put on the CAD (edges at\n"
+      "Gauss-Lobatto positions in arc length, faces blended in parameter space and optimized on\n"
+      "the surface, chapter 5), the volume optimized (chapter 4). Without MODEL: the built-in cube\n"
+      "with a spherical cavity. Solids give tetrahedra, planar models a planar mesh in z = 0,\n"
+      "other models a surface mesh. The result is checked (all elements valid, boundary nodes on\n"
+      "the CAD) before it is written; an invalid result writes nothing.\n"
+      "Exit status: 0 valid mesh written, 3 invalid result (nothing written), 1 unreadable\n"
+      "input or meshing failure, 2 bad options.\n\noptions");
+  opts.add_options()("help,h", "show this help")                                                     //
+      ("p", po::value(&o.p)->default_value(2), "polynomial degree (>= 2)")                                             //
+      ("output,o", po::value(&o.out)->default_value("curved.msh"), "curved mesh (.msh, MSH 4.1)")                                 //
+      ("mesh", po::value(&o.mesh), "linear mesh to curve instead of meshing the model (.msh)")       //
+      ("size", po::value(&o.size)->default_value(0.0), "element size (0: model size / 20)")          //
+      ("size-curvature", po::value(&o.size_curvature)->default_value(0),
+       "elements per 2 pi radians of curvature (0: off)")                                            //
+      ("surface", po::bool_switch(&o.surface), "surface mesh of a model with solids")               //
+      ("quads", po::bool_switch(&o.quads), "quadrilaterals (surface and planar meshes)")            //
+      ("measure", po::value(&o.measure)->default_value("shape"), "distortion measure: shape | oddy")  //
+      ("solver", po::value(&o.solver)->default_value("auto"),
+       "volume / planar solver: newton | matrix-free | gauss-seidel | auto")                          //
+      ("pcont", po::value(&o.pcont)->default_value("auto"),
+       "p-continuation of the volume stage: auto (when the initial mesh is tangled) | on | off")    //
+      ("threads", po::value(&o.threads)->default_value(0), "threads (0: OpenMP's default)")         //
+      ("iterations-after-valid", po::value(&o.iterations_after_valid)->default_value(-1),
+       "volume stage: stop once valid this many iterations (-1: optimize to convergence)")         //
+      ("tolerance", po::value(&o.tolerance)->default_value(1e-6),
+       "--mesh: classification tolerance, relative to the model's size")                             //
+      ("vtu", po::value(&o.vtu), "write the curved mesh colored by quality (ParaView)")              //
+      ("json", po::value(&o.json), "write the statistics of every stage as JSON")                    //
+      ("verbose,v", po::bool_switch(&o.verbose), "one progress line per optimizer iteration (stderr)");
+  po::variables_map vm;
+  if (!hom::tools::parse_options("curve", argc, argv, opts, {{"model", po::value(&o.model)}}, vm)) return 0;
+  check_options(o);
+
+  hom::cad::CadModel cad =
+      o.model.empty() ? hom::cad::cube_with_cavity_model() : hom::cad::read_cad(o.model);  // CadError names the file
+  std::printf("%s\n", cad.summary().c_str());
+  for (const auto& h : cad.healing()) std::printf("  healed: %s\n", h.c_str());
+  hom::cad::CadMeshOptions mo;
+  mo.size = o.size;
+  mo.size_from_curvature = o.size_curvature;
+  mo.threads = 1;
+  if (o.model.empty() && o.size == 0.0) {
+    // The built-in model: graded towards the cavity as in test_cad (about
+    // 1400 tetrahedra; table 4.1's mesh is of this kind).
+    mo.size = 1.62;
+    for (int v = 1; v <= cad.num_vertices(); ++v)
+      mo.vertex_sizes[v] = (cad.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
+  }
+
+  const auto t0 = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  if (!o.mesh.empty()) {
+    const auto data = hom::io::read_msh_data(o.mesh);
+    return hom::tools::with_mesh<hom::WarpBlend>(data, [&](auto& mesh) -> int {
+      using M = std::decay_t<decltype(mesh)>;
+      using F = typename M::family;
+      if constexpr (!F::is_simplex && F::dim == 3) {
+        throw hom::tools::UsageError("curve: " + o.mesh + " is a hexahedral mesh; hom curve handles tetrahedra, and "
+                                     "triangles or quadrilaterals on surfaces or in the plane");
+      } else {
+        if (mesh.degree() != 1)
+          throw hom::io::IoError(o.mesh + ": a linear mesh is needed, the file's elements are of degree " +
+                                 std::to_string(mesh.degree()));
+        classify_user_mesh(mesh, cad, o.tolerance * cad.size());
+        return curve_and_write(cad, mesh, o, elapsed());
+      }
+    });
+  }
+  if (cad.num_solids() > 0 && !o.surface) {
+    if (o.quads) throw hom::tools::UsageError("curve: volume meshes are tetrahedral; --quads needs --surface");
+    const auto linear = hom::cad::mesh_cad<hom::Simplex<3>>(cad, mo);
+    return curve_and_write(cad, linear, o, elapsed());
+  }
+  if (auto placed = hom::cad::place_in_xy_plane(cad)) {
+    if (placed->moved) std::printf("planar model: moved rigidly into the plane z = 0\n");
+    if (o.quads)
+      return curve_and_write(placed->model, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 2>(placed->model, mo), o,
+                             elapsed());
+    return curve_and_write(placed->model, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 2>(placed->model, mo), o,
+                           elapsed());
+  }
+  if (o.quads) return curve_and_write(cad, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 3>(cad, mo), o, elapsed());
+  return curve_and_write(cad, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 3>(cad, mo), o, elapsed());
+}
+
+const hom::tools::RegisterCommand reg{{"curve", "Generate a curved high-order mesh from CAD (chapter 6)", run}};
+
+}  // namespace

@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# `hom curve` end to end: the built-in cube with a spherical cavity at p = 2
+# gives a valid mesh (exit 0; `hom quality` of the written file, an
+# independent read, finds no inverted element; the JSON report has the
+# linear / initial / optimized stages with 0 inverted at the end and follows
+# DESIGN.md's schema; the MSH file carries parametric coordinates); a garbage
+# STEP file, a missing file and bad options fail with the documented exit
+# status, a message naming the file, and no output left behind.
+#   $1 = hom
+set -uo pipefail
+hom=$1
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+py=/usr/bin/python3
+[[ -x $py ]] || py=python3
+schema="$(dirname "$0")/check_report_schema.py"
+
+# json_field FILE PART STAGE KEY
+json_field() {
+  "$py" -c 'import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["tool"] == "hom curve", r["tool"]
+c = [c for c in r["cases"] if c["part"] == sys.argv[2] and c["stage"] == sys.argv[3]]
+assert len(c) == 1, (sys.argv[2], sys.argv[3])
+print(c[0][sys.argv[4]])' "$@"
+}
+
+# 1. The built-in model at p = 2.
+out="$work/cube.msh"
+log=$("$hom" curve --p 2 -o "$out" --vtu "$work/cube.vtu" --json "$work/cube.json" --threads 1 2>&1); rc=$?
+echo "$log" | sed 's/^/  [builtin] /'
+[[ $rc -eq 0 ]] || fail "built-in p = 2: exit $rc"
+[[ -s "$out" && -s "$work/cube.vtu" && -s "$work/cube.json" ]] || fail "built-in: an output is missing"
+ls "$work" | grep -q '\.tmp' && fail "built-in: temporary file left behind"
+grep -q "^valid" <<<"$log" || fail "built-in: no validity statement"
+"$hom" quality "$out" >/dev/null; rc=$?
+[[ $rc -eq 0 ]] || fail "built-in: hom quality of the output exits $rc (inverted elements?)"
+[[ $(json_field "$work/cube.json" volume optimized inverted) -eq 0 ]] || fail "json: optimized volume has inverted elements"
+[[ $(json_field "$work/cube.json" surface optimized inverted) -eq 0 ]] || fail "json: optimized surface has inverted elements"
+json_field "$work/cube.json" volume linear min_q >/dev/null || fail "json: no linear stage"
+json_field "$work/cube.json" volume initial min_q >/dev/null || fail "json: no initial volume stage"
+[[ $(json_field "$work/cube.json" volume optimized valid) == True ]] || fail "json: result not marked valid"
+"$py" "$schema" "$work/cube.json" --tool "hom curve" --stage linear --stage initial --stage optimized \
+  || fail "json: not the DESIGN.md schema"
+# MSH 4.1 with parametric node blocks ($Nodes block header "dim tag 1 n").
+[[ $(sed -n 2p "$out" | cut -d' ' -f1) == 4.1 ]] || fail "output is not MSH 4.1"
+"$py" - "$out" <<'PY' || fail "MSH: no parametric node block on a surface"
+import sys
+lines = open(sys.argv[1]).read().split("\n")
+i = lines.index("$Nodes")
+nblocks = int(lines[i + 1].split()[0])
+j, para = i + 2, 0
+for _ in range(nblocks):
+    dim, tag, parametric, n = map(int, lines[j].split())
+    para += parametric and dim == 2 and n > 0
+    j += 1 + 2 * n
+sys.exit(0 if para > 0 else 1)
+PY
+grep -q '\$PhysicalNames' "$out" || fail "MSH: no physical groups"
+
+# 2. A garbage STEP file: exit 1, the file named, no output.
+echo "this is not a STEP file" > "$work/garbage.step"
+err=$("$hom" curve "$work/garbage.step" --p 2 -o "$work/garbage.msh" --threads 1 2>&1 >/dev/null); rc=$?
+[[ $rc -eq 1 ]] || fail "garbage STEP: exit $rc, expected 1"
+grep -q "garbage.step" <<<"$err" || fail "garbage STEP: the message does not name the file: $err"
+[[ $(echo "$err" | wc -l) -eq 1 ]] || fail "garbage STEP: not a one-line message: $err"
+[[ ! -e "$work/garbage.msh" ]] || fail "garbage STEP: output written"
+
+# 3. A missing model, a missing user mesh: exit 1, named.
+err=$("$hom" curve "$work/missing.brep" --p 3 -o "$work/m.msh" 2>&1 >/dev/null); rc=$?
+[[ $rc -eq 1 ]] && grep -q "missing.brep" <<<"$err" || fail "missing model: exit $rc: $err"
+err=$("$hom" curve --mesh "$work/none.msh" --p 3 -o "$work/m.msh" 2>&1 >/dev/null); rc=$?
+[[ $rc -eq 1 ]] && grep -q "none.msh" <<<"$err" || fail "missing mesh: exit $rc: $err"
+[[ ! -e "$work/m.msh" ]] || fail "missing input: output written"
+
+# 4. Bad options: exit 2, nothing written.
+for args in "--p 1 -o $work/b.msh" "--p 3 -o $work/b.vtu" "--p 3 -o $work/b.msh --measure foo" \
+            "--p 3 -o $work/b.msh --solver foo" "--p 3 -o $work/b.msh --quads"; do
+  "$hom" curve $args >/dev/null 2>&1; rc=$?
+  [[ $rc -eq 2 ]] || fail "bad options '$args': exit $rc, expected 2"
+done
+[[ ! -e "$work/b.msh" && ! -e "$work/b.vtu" ]] || fail "bad options: output written"
+echo "OK"

@@ -1,0 +1,250 @@
+// Chapter 6's a posteriori pipeline (src/curve): a linear mesh of a CAD model
+// elevated and curved onto it. Checked against the geometry itself, not the
+// pipeline's own report: edge nodes at Gauss-Lobatto fractions of the arc
+// length of circles (angles from the circles' known centres), face nodes on
+// the sphere at its radius, every boundary node on its model entity at its
+// parameters, validity recomputed with hom::mesh_quality, and clear errors
+// for a mesh that does not fit the model.
+
+#include <doctest/doctest.h>
+
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "cad_mesher.hpp"
+#include "curve_mesh.hpp"
+#include "curve_models.hpp"
+#include "hom/measure/shape_measure.hpp"
+#include "hom/mesh/facet.hpp"
+#include "hom/mesh/topology.hpp"
+#include "hom/nodes/gauss_lobatto.hpp"
+#include "hom/quality/mesh_quality.hpp"
+
+using namespace hom;
+
+namespace {
+
+constexpr double pi = std::numbers::pi;
+
+cad::CurveOptions options(int p) {
+  cad::CurveOptions o;
+  o.p = p;
+  o.threads = 1;
+  return o;
+}
+
+// Every node classified on a model vertex, edge or face lies there at its
+// parameters (evaluated here, not with the pipeline's check).
+template <class MeshT>
+void check_nodes_on_cad(const MeshT& mesh, const cad::CadModel& m, double tol) {
+  int checked = 0;
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    const auto& c = mesh.node_class(i);
+    if (!c.entity || c.kind == NodeKind::free) continue;
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    x.template head<MeshT::space_dim>() = mesh.node(i);
+    CAPTURE(i);
+    if (c.entity->dim == 0) {
+      CHECK((m.vertex(c.entity->tag) - x).norm() <= tol);
+    } else if (c.entity->dim == 1) {
+      REQUIRE(c.num_params == 1);
+      CHECK((m.curve(c.entity->tag).evaluate(c.params[0]) - x).norm() <= tol);
+    } else {
+      REQUIRE(c.entity->dim == 2);
+      REQUIRE(c.num_params == 2);
+      CHECK((m.surface(c.entity->tag).evaluate({c.params[0], c.params[1]}) - x).norm() <= tol);
+    }
+    ++checked;
+  }
+  CHECK(checked > 0);
+}
+
+// The nodes of every topological boundary facet of a volume or planar mesh
+// are classified on the model (none is free).
+template <class MeshT>
+void check_boundary_classified(const MeshT& mesh) {
+  using F = typename MeshT::family;
+  const Topology<F> topo(mesh);
+  int facets = 0;
+  for (const auto& f : topo.boundary_facets()) {
+    for (int local : facet_nodes<F>(mesh.degree(), f.local)) {
+      const auto& c = mesh.node_class(mesh.elements()(local, f.element));
+      CHECK(c.kind != NodeKind::free);
+      REQUIRE(c.entity);
+      CHECK(c.entity->dim < MeshT::dim);
+    }
+    ++facets;
+  }
+  CHECK(facets > 0);
+}
+
+// The plate's full circles (holes): centre and radius.
+struct Circle {
+  Eigen::Vector2d c;
+  double r;
+};
+const std::array<Circle, 3> plate_holes = {{{{1.8, 1.8}, 0.7}, {{8.3, 2.0}, 0.9}, {{2.5, 6.2}, 0.8}}};
+
+// For each element edge whose interior nodes lie on one of the plate's
+// holes: the nodes are on the circle, and their angles divide the edge's
+// angle at the Gauss-Lobatto fractions (1 + xi_j) / 2 in order.
+template <class MeshT>
+int check_gll_on_holes(const MeshT& mesh, int p) {
+  using F = typename MeshT::family;
+  const Eigen::VectorXd gll = gauss_lobatto_points(p);  // ascending in [-1, 1]
+  const auto& layout = mesh.layout();
+  int edges = 0;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    for (const auto& edge : F::edges()) {
+      const int a = mesh.vertex(e, edge[0]), b = mesh.vertex(e, edge[1]);
+      const Eigen::Vector2d xa = mesh.node(a).template head<2>(), xb = mesh.node(b).template head<2>();
+      const Circle* hole = nullptr;
+      for (const auto& h : plate_holes)
+        if (std::abs((xa - h.c).norm() - h.r) < 1e-9 && std::abs((xb - h.c).norm() - h.r) < 1e-9) hole = &h;
+      if (!hole) continue;
+      // Interior nodes of this edge in order from a to b: lattice points
+      // between the two vertices' lattice points.
+      const auto la = layout.lattice(edge[0]), lb = layout.lattice(edge[1]);
+      const double ta = std::atan2(xa[1] - hole->c[1], xa[0] - hole->c[0]);
+      double tb = std::atan2(xb[1] - hole->c[1], xb[0] - hole->c[0]);
+      tb = ta + std::remainder(tb - ta, 2 * pi);
+      for (int j = 1; j < p; ++j) {
+        auto l = la;
+        for (std::size_t k = 0; k < l.size(); ++k) l[k] = (la[k] * (p - j) + lb[k] * j) / p;
+        const int node = mesh.element(e)[layout.index_of(l)];
+        const Eigen::Vector2d x = mesh.node(node).template head<2>();
+        CHECK((x - hole->c).norm() == doctest::Approx(hole->r).epsilon(1e-12));
+        const double t = ta + std::remainder(std::atan2(x[1] - hole->c[1], x[0] - hole->c[0]) - ta, 2 * pi);
+        CHECK((t - ta) / (tb - ta) == doctest::Approx((1 + gll[j]) / 2).epsilon(1e-10));
+      }
+      ++edges;
+    }
+  }
+  return edges;
+}
+
+}  // namespace
+
+TEST_CASE("curved cube with a spherical cavity at p = 2 and 3: valid, boundary on the CAD") {
+  const auto m = cad::cube_with_cavity_model();
+  cad::CadMeshOptions mo;
+  mo.size = 1.62;
+  for (int v = 1; v <= m.num_vertices(); ++v)
+    mo.vertex_sizes[v] = (m.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.3 : 1.62;
+  const auto linear = cad::mesh_cad<Simplex<3>>(m, mo);
+  for (int p : {2, 3}) {
+    CAPTURE(p);
+    const auto r = cad::curve_mesh<Simplex<3>, 3>(m, linear, options(p));
+    CHECK(r.valid);
+    CHECK(r.conformity.ok);
+    CHECK(r.mesh.degree() == p);
+    CHECK(r.mesh.num_elements() == linear.num_elements());
+    // Independent validity check.
+    const auto q = mesh_quality(r.mesh, ShapeMeasure{}, IdealKind::straight_sided);
+    CHECK(q.inverted() == 0);
+    CHECK(q.quality_statistics().min > 0.1);
+    // Stages: linear, surface initial / optimized, volume initial / optimized.
+    REQUIRE(r.stages.size() == 5);
+    CHECK(r.stages[0].stage == "linear");
+    CHECK(r.stages[0].quality.min == doctest::Approx(1.0));
+    CHECK(r.stages.back().part == "volume");
+    CHECK(r.stages.back().quality.inverted == 0);
+    CHECK(r.stages[2].part == "surface");
+    CHECK(r.stages[2].quality.inverted == 0);
+    check_nodes_on_cad(r.mesh, m, 1e-10 * m.size());
+    check_boundary_classified(r.mesh);
+    // Every node of the cavity's boundary at the sphere's radius (exact
+    // geometry, independent of the model's parameterization).
+    int on_sphere = 0;
+    for (int i = 0; i < r.mesh.num_nodes(); ++i) {
+      const auto& c = r.mesh.node_class(i);
+      if (c.entity && c.entity->dim == 2 && m.surface(c.entity->tag).type() == "sphere") {
+        CHECK((r.mesh.node(i) - Eigen::Vector3d::Constant(2.5)).norm() == doctest::Approx(0.5).epsilon(1e-10));
+        ++on_sphere;
+      }
+    }
+    CHECK(on_sphere > 0);
+  }
+}
+
+TEST_CASE("planar plate with holes: edge nodes at Gauss-Lobatto positions in arc length, valid") {
+  const auto m = cad::plate_with_holes_model();
+  REQUIRE(m.num_faces() == 1);
+  const auto placed = cad::place_in_xy_plane(m);
+  REQUIRE(placed);
+  CHECK_FALSE(placed->moved);  // built in z = 0
+  cad::CadMeshOptions mo;
+  mo.size = 0.9;
+  SUBCASE("triangles, p = 5") {
+    const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+    const auto r = cad::curve_mesh<Simplex<2>, 2>(m, linear, options(5));
+    CHECK(r.valid);
+    CHECK(mesh_quality(r.mesh, ShapeMeasure{}, IdealKind::straight_sided).inverted() == 0);
+    CHECK(check_gll_on_holes(r.mesh, 5) >= 12);
+    check_nodes_on_cad(r.mesh, m, 1e-10 * m.size());
+    check_boundary_classified(r.mesh);
+  }
+  SUBCASE("quadrilaterals, p = 3") {
+    const auto linear = cad::mesh_cad<Cube<2>, WarpBlend, 2>(m, mo);
+    const auto r = cad::curve_mesh<Cube<2>, 2>(m, linear, options(3));
+    CHECK(r.valid);
+    CHECK(mesh_quality(r.mesh, ShapeMeasure{}, IdealKind::straight_sided).inverted() == 0);
+    CHECK(check_gll_on_holes(r.mesh, 3) >= 12);
+    check_nodes_on_cad(r.mesh, m, 1e-10 * m.size());
+  }
+}
+
+TEST_CASE("surface mesh of the NURBS sphere: face nodes on the sphere, valid on every patch") {
+  const auto m = cad::nurbs_sphere_model(Eigen::Vector3d::Zero(), 0.5);
+  cad::CadMeshOptions mo;
+  mo.size = 0.2;
+  const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 3>(m, mo);
+  const auto r = cad::curve_mesh<Simplex<2>, 3>(m, linear, options(4));
+  CHECK(r.valid);
+  REQUIRE(r.stages.size() == 3);
+  CHECK(r.stages.back().part == "surface");
+  CHECK(r.stages.back().quality.inverted == 0);
+  int faces = 0;
+  for (int i = 0; i < r.mesh.num_nodes(); ++i) {
+    CHECK(r.mesh.node(i).norm() == doctest::Approx(0.5).epsilon(1e-10));
+    const auto& c = r.mesh.node_class(i);
+    REQUIRE(c.entity);
+    faces += c.entity->dim == 2;
+  }
+  CHECK(faces > r.mesh.num_nodes() / 3);
+  check_nodes_on_cad(r.mesh, m, 1e-10);
+}
+
+TEST_CASE("a mesh that does not fit the model is an error naming what is wrong") {
+  const auto m = cad::plate_with_holes_model();
+  cad::CadMeshOptions mo;
+  mo.size = 2.0;
+  auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+  SUBCASE("an element on a face the model lacks") {
+    linear.element_entities()[3] = 42;
+    try {
+      cad::curve_mesh<Simplex<2>, 2>(m, linear, options(2));
+      FAIL("no error");
+    } catch (const cad::MeshingError& e) {
+      const std::string what = e.what();
+      CHECK(what.find("element 3") != std::string::npos);
+      CHECK(what.find("face 42") != std::string::npos);
+    }
+  }
+  SUBCASE("a boundary node classified on no model entity") {
+    const Topology<Simplex<2>> topo(linear);
+    const auto f = topo.boundary_facets().front();
+    const int node = linear.vertex(f.element, facet_vertices<Simplex<2>>(f.local)[0]);
+    linear.node_class(node) = NodeClass{NodeKind::fixed, std::nullopt, 0, {}};
+    try {
+      cad::curve_mesh<Simplex<2>, 2>(m, linear, options(2));
+      FAIL("no error");
+    } catch (const cad::MeshingError& e) {
+      CHECK(std::string(e.what()).find("node " + std::to_string(node)) != std::string::npos);
+    }
+  }
+  CHECK_THROWS_AS((cad::curve_mesh<Simplex<2>, 2>(m, linear, options(1))), std::invalid_argument);
+}
