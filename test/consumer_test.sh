@@ -10,12 +10,12 @@ trap 'rm -rf "$work"' EXIT
 mkdir -p "$work/sub/subprojects"
 cp "$src"/example/consumer/* "$work/sub/"
 ln -s "$src" "$work/sub/subprojects/hom"
-meson setup "$work/sub/build" "$work/sub" --wrap-mode=forcefallback -Dhom:tests=false -Dhom:benchmarks=false >/dev/null
+meson setup "$work/sub/build" "$work/sub" --wrap-mode=forcefallback -Dhom:tests=false -Dhom:benchmarks=false -Dhom:tools=false >/dev/null
 ninja -C "$work/sub/build" consumer >/dev/null
 "$work/sub/build/consumer"
 
 # 2. Installed library through pkg-config.
-meson setup "$work/lib" "$src" --prefix="$work/prefix" -Dtests=false -Dbenchmarks=false >/dev/null
+meson setup "$work/lib" "$src" --prefix="$work/prefix" -Dtests=false -Dbenchmarks=false -Dtools=false >/dev/null
 meson install -C "$work/lib" --only-changed >/dev/null
 pc=$(find "$work/prefix" -name hom.pc -printf '%h\n' | head -n1)
 test -n "$pc"
