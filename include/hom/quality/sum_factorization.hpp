@@ -117,17 +117,12 @@ class TetrahedronSumFactorization {
     w.Phi[2].noalias() = w.Sc * F_;
     // Chain rule to d/d xi, reordering the points to the rule's order.
     JP.resize(R, 3 * num_points());
-    for (int r = 0; r < n; ++r)
-      for (int q = 0; q < n; ++q)
-        for (int a = 0; a < n; ++a) {
-          const int pt = a + n * q + n * n * r;
-          const Eigen::Matrix3d& M = chain_[pt];
-          const Eigen::Index off = R * (r + Eigen::Index(n) * q);
+    for_each_point(R, [&](int pt, int a, Eigen::Index off, const Eigen::Matrix3d& M) {
           const auto da = w.Phi[0].col(a).segment(off, R);
           const auto db = w.Phi[1].col(a).segment(off, R);
           const auto dc = w.Phi[2].col(a).segment(off, R);
           for (int c = 0; c < 3; ++c) JP.col(3 * pt + c) = M(0, c) * da + M(1, c) * db + M(2, c) * dc;
-        }
+    });
   }
 
   /// out = P * G^T: P is R x 3 nq in the layout of gradients(), out R x n.
@@ -135,15 +130,10 @@ class TetrahedronSumFactorization {
     const Eigen::Index R = P.rows();
     const int n = n_, np = p_ + 1;
     for (auto& phi : w.Phi) phi.resize(R * n * n, n);
-    for (int r = 0; r < n; ++r)
-      for (int q = 0; q < n; ++q)
-        for (int a = 0; a < n; ++a) {
-          const int pt = a + n * q + n * n * r;
-          const Eigen::Matrix3d& M = chain_[pt];
-          const Eigen::Index off = R * (r + Eigen::Index(n) * q);
-          const auto p0 = P.col(3 * pt), p1 = P.col(3 * pt + 1), p2 = P.col(3 * pt + 2);
-          for (int d = 0; d < 3; ++d) w.Phi[d].col(a).segment(off, R) = M(d, 0) * p0 + M(d, 1) * p1 + M(d, 2) * p2;
-        }
+    for_each_point(R, [&](int pt, int a, Eigen::Index off, const Eigen::Matrix3d& M) {
+      const auto p0 = P.col(3 * pt), p1 = P.col(3 * pt + 1), p2 = P.col(3 * pt + 2);
+      for (int d = 0; d < 3; ++d) w.Phi[d].col(a).segment(off, R) = M(d, 0) * p0 + M(d, 1) * p1 + M(d, 2) * p2;
+    });
     w.S0.noalias() = w.Phi[0] * dF_.transpose();
     w.Sb.noalias() = w.Phi[1] * F_.transpose();
     w.Sc.noalias() = w.Phi[2] * F_.transpose();
@@ -167,6 +157,20 @@ class TetrahedronSumFactorization {
   }
 
  private:
+  // fn(pt, a, off, M) for every point: pt its index in the rule's order, a its
+  // collapsed-a index, off the first row of its (r, q) block in the stage-3
+  // layout (R rows per block), M = chain_[pt].
+  template <class Fn>
+  void for_each_point(Eigen::Index R, Fn&& fn) const {
+    const int n = n_;
+    for (int r = 0; r < n; ++r)
+      for (int q = 0; q < n; ++q)
+        for (int a = 0; a < n; ++a) {
+          const int pt = a + n * q + n * n * r;
+          fn(pt, a, R * (r + Eigen::Index(n) * q), chain_[pt]);
+        }
+  }
+
   // Index of the pair (i, j), i + j <= p, with j fastest.
   int pair_index(int i, int j) const { return i * (p_ + 1) - i * (i - 1) / 2 + j; }
   int grouped_index(int i, int j, int k) const { return pair_offset_[pair_index(i, j)] + k; }
