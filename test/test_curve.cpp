@@ -218,6 +218,48 @@ TEST_CASE("surface mesh of the NURBS sphere: face nodes on the sphere, valid on 
   check_nodes_on_cad(r.mesh, m, 1e-10);
 }
 
+TEST_CASE("optimize_on_cad: face nodes slid in (u, v) come back, stay on the surface, edge nodes stay") {
+  const auto m = cad::nurbs_sphere_model(Eigen::Vector3d::Zero(), 0.5);
+  cad::CadMeshOptions mo;
+  mo.size = 0.25;
+  const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 3>(m, mo);
+  const auto curved = cad::curve_mesh<Simplex<2>, 3>(m, linear, options(3));
+  REQUIRE(curved.valid);
+  // Slide every face node along its surface by a deterministic (u, v) offset
+  // of a fifth of the parameter spacing; CAD-edge and vertex nodes stay.
+  auto moved = curved.mesh;
+  int slid = 0;
+  for (int i = 0; i < moved.num_nodes(); ++i) {
+    auto& c = moved.node_class(i);
+    if (!(c.entity && c.entity->dim == 2 && c.num_params == 2)) continue;
+    const auto s = m.surface(c.entity->tag);
+    const double du = 0.02 * std::sin(7.0 * i), dv = 0.02 * std::cos(5.0 * i);
+    c.params = {s.range(0).normalize(c.params[0] + du * (s.range(0).hi - s.range(0).lo)),
+                s.range(1).normalize(c.params[1] + dv * (s.range(1).hi - s.range(1).lo))};
+    moved.node(i) = s.evaluate({c.params[0], c.params[1]});
+    ++slid;
+  }
+  REQUIRE(slid > 0);
+  cad::CurveOptions o = options(2);  // the degree is the mesh's own (3)
+  const auto r = cad::optimize_on_cad<Simplex<2>, 3>(m, moved, o);
+  REQUIRE(r.stages.size() == 2);
+  CHECK(r.stages.front().stage == "initial");
+  CHECK(r.stages.back().stage == "optimized");
+  CHECK(r.mesh.degree() == 3);
+  CHECK(r.valid);
+  // Quality is back to (at least nearly) the curved mesh's optimum, and
+  // better than the slid start's.
+  CHECK(r.stages.back().quality.min > r.stages.front().quality.min);
+  CHECK(r.stages.back().quality.mean >= curved.stages.back().quality.mean - 1e-3);
+  for (int i = 0; i < r.mesh.num_nodes(); ++i) {
+    CHECK(r.mesh.node(i).norm() == doctest::Approx(0.5).epsilon(1e-10));
+    const auto& c = r.mesh.node_class(i);
+    if (c.entity && c.entity->dim < 2) CHECK((r.mesh.node(i) - curved.mesh.node(i)).norm() <= 1e-14);
+  }
+  check_nodes_on_cad(r.mesh, m, 1e-10);
+  CHECK_THROWS_AS(cad::optimize_on_cad<Simplex<2>, 3>(m, linear, o), std::invalid_argument);
+}
+
 TEST_CASE("a mesh that does not fit the model is an error naming what is wrong") {
   const auto m = cad::plate_with_holes_model();
   cad::CadMeshOptions mo;

@@ -162,10 +162,35 @@ class Pipeline {
     say("boundary on the CAD: " + std::to_string(on_curves) + " mesh edges on CAD curves (nodes at Gauss-Lobatto "
         "positions in arc length), " + std::to_string(face_nodes) + " face nodes blended in (u, v) (" +
         fmt_s(t_boundary) + ")");
+    optimize_placed(out, t_boundary);
+    out.time_s = since(start);
+    return out;
+  }
 
+  /// Steps 3-4 alone on a mesh that is already curved onto the model (its
+  /// boundary nodes classified on the CAD entities, for instance a file
+  /// written by `hom curve`): the ideal is each element's straight-sided
+  /// counterpart (its vertices), the CAD-edge nodes stay, the face nodes
+  /// slide on their surfaces and the interior nodes move.
+  CurveResult<MeshT> run_curved(const MeshT& curved) {
+    const auto start = Clock::now();
+    CurveResult<MeshT> out;
+    mesh_ = curved;
+    mesh_.reset_ideal();
+    straight_ = mesh_.nodes();  // only the vertex columns are read (straight3)
+    collect_patches();
+    optimize_placed(out, 0.0);
+    out.time_s = since(start);
+    return out;
+  }
+
+ private:
+  /// Chapter 5 on the CAD faces, chapter 4 in the domain, the result's
+  /// per-element quality and its CAD conformity.
+  void optimize_placed(CurveResult<MeshT>& out, double t_boundary) {
     if constexpr (!planar) {
       // 3. Chapter 5 on every CAD face.
-      t0 = Clock::now();
+      const auto t0 = Clock::now();
       build_face_meshes();
       StageReport initial = surface_stage("initial");
       initial.time_s = t_boundary;
@@ -178,7 +203,6 @@ class Pipeline {
     }
     if constexpr (!surface) {
       // 4. Chapter 4 in the volume / planar domain.
-      t0 = Clock::now();
       MeshQuality q0 = mesh_quality(mesh_, measure_, IdealKind::straight_sided, rule());
       StageReport initial = make_stage(part(), "initial", q0);
       initial.nodes = mesh_.num_nodes();
@@ -195,11 +219,8 @@ class Pipeline {
     out.conformity = check_on_cad<Family, SpaceDim>(mesh_, cad_, o_.tolerance * cad_.size());
     out.valid = out.inverted == 0 && out.conformity.ok;
     out.mesh = std::move(mesh_);
-    out.time_s = since(start);
-    return out;
   }
 
- private:
   static const char* part() { return volume ? "volume" : planar ? "planar" : "surface"; }
   const QuadratureRule<D>& rule() const { return quadrature_for<Family, DefaultExactness>(o_.p); }
   const QuadratureRule<2>& face_rule() const { return quadrature_for<PF, DefaultExactness>(o_.p); }
@@ -770,6 +791,26 @@ class Pipeline {
 
 }  // namespace
 
+namespace {
+
+/// Runs `step` on the pipeline of the options' measure.
+template <ElementFamily Family, int SpaceDim, class Step>
+CurveResult<CurvedMesh<Family, SpaceDim>> with_pipeline(const CadModel& cad, const CurveOptions& options, Step step) {
+  if (options.solver != "auto") parse_solver_kind(options.solver);  // throws on a bad name
+  if (options.measure == "oddy") {
+    const OddyMeasure m{};
+    Pipeline<Family, SpaceDim, OddyMeasure> pipeline(cad, options, m);
+    return step(pipeline);
+  }
+  if (options.measure != "shape")
+    throw std::invalid_argument("hom::cad: the measure must be shape or oddy, got '" + options.measure + "'");
+  const ShapeMeasure m{};
+  Pipeline<Family, SpaceDim, ShapeMeasure> pipeline(cad, options, m);
+  return step(pipeline);
+}
+
+}  // namespace
+
 template <ElementFamily Family, int SpaceDim>
 CurveResult<CurvedMesh<Family, SpaceDim>> curve_mesh(const CadModel& cad, const CurvedMesh<Family, SpaceDim>& linear,
                                                      const CurveOptions& options) {
@@ -777,15 +818,17 @@ CurveResult<CurvedMesh<Family, SpaceDim>> curve_mesh(const CadModel& cad, const 
   if (linear.degree() != 1)
     throw std::invalid_argument("hom::cad::curve_mesh: the input must be a linear mesh, got degree " +
                                 std::to_string(linear.degree()));
-  if (options.solver != "auto") parse_solver_kind(options.solver);  // throws on a bad name
-  if (options.measure == "oddy") {
-    const OddyMeasure m{};
-    return Pipeline<Family, SpaceDim, OddyMeasure>(cad, options, m).run(linear);
-  }
-  if (options.measure != "shape")
-    throw std::invalid_argument("hom::cad::curve_mesh: the measure must be shape or oddy, got '" + options.measure + "'");
-  const ShapeMeasure m{};
-  return Pipeline<Family, SpaceDim, ShapeMeasure>(cad, options, m).run(linear);
+  return with_pipeline<Family, SpaceDim>(cad, options, [&](auto& pipeline) { return pipeline.run(linear); });
+}
+
+template <ElementFamily Family, int SpaceDim>
+CurveResult<CurvedMesh<Family, SpaceDim>> optimize_on_cad(const CadModel& cad, const CurvedMesh<Family, SpaceDim>& curved,
+                                                          CurveOptions options) {
+  if (curved.degree() < 2)
+    throw std::invalid_argument("hom::cad::optimize_on_cad: the mesh must be curved (degree >= 2), got degree " +
+                                std::to_string(curved.degree()));
+  options.p = curved.degree();
+  return with_pipeline<Family, SpaceDim>(cad, options, [&](auto& pipeline) { return pipeline.run_curved(curved); });
 }
 
 template <ElementFamily Family, int SpaceDim>
@@ -860,6 +903,8 @@ double add_cad_parameters(io::MshData& data, const CadModel& cad) {
 #define HOM_CURVE_INSTANTIATE(F, S)                                                                        \
   template CurveResult<CurvedMesh<F, S>> curve_mesh<F, S>(const CadModel&, const CurvedMesh<F, S>&,        \
                                                           const CurveOptions&);                            \
+  template CurveResult<CurvedMesh<F, S>> optimize_on_cad<F, S>(const CadModel&, const CurvedMesh<F, S>&,   \
+                                                               CurveOptions);                              \
   template CadConformity check_on_cad<F, S>(const CurvedMesh<F, S>&, const CadModel&, double);
 HOM_CURVE_INSTANTIATE(Simplex<3>, 3)
 HOM_CURVE_INSTANTIATE(Simplex<2>, 3)

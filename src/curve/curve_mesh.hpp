@@ -139,6 +139,18 @@ template <ElementFamily Family, int SpaceDim>
 CurveResult<CurvedMesh<Family, SpaceDim>> curve_mesh(const CadModel& cad, const CurvedMesh<Family, SpaceDim>& linear,
                                                      const CurveOptions& options);
 
+/// Steps 3-4 alone, on a mesh of `cad` that is already curved (degree >= 2;
+/// options.p is taken from it), for instance a file written by `hom curve` or
+/// a mesh classified on the model with classify(): the nodes on CAD edges and
+/// vertices stay, the nodes on CAD faces are optimized on their surfaces in
+/// (u, v) (chapter 5, face by face; a node without parameters gets its
+/// closest point's), then the interior of a volume or planar mesh (chapter 4),
+/// each element against its straight-sided counterpart. Stages "initial" and
+/// "optimized" (no "linear" stage). Throws as curve_mesh.
+template <ElementFamily Family, int SpaceDim>
+CurveResult<CurvedMesh<Family, SpaceDim>> optimize_on_cad(const CadModel& cad, const CurvedMesh<Family, SpaceDim>& curved,
+                                                          CurveOptions options);
+
 /// Checks that every node classified on a model vertex, edge or face lies
 /// there at its parameters (nodes on an edge or face without parameters
 /// fail), within `tolerance` (absolute). Planar meshes are compared in z = 0.

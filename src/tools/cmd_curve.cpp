@@ -54,6 +54,7 @@ namespace {
 struct CurveCli {
   std::string model, mesh, out, vtu, json;
   int p = 0;
+  bool p_given = false;  ///< --p on the command line (a curved --mesh keeps its own degree)
   double size = 0.0;
   int size_curvature = 0;
   bool surface = false;
@@ -83,8 +84,11 @@ void print_table(const std::vector<hom::cad::StageReport>& stages) {
   std::printf("\n");
 }
 
+/// Curves `input` (a linear mesh of the model; or, when it is already curved,
+/// only optimizes it on the model: hom::cad::optimize_on_cad), checks the
+/// result and writes it.
 template <class MeshT>
-int curve_and_write(const hom::cad::CadModel& cad, const MeshT& linear, const CurveCli& o, double t_linear) {
+int curve_and_write(const hom::cad::CadModel& cad, const MeshT& input, const CurveCli& o, double t_linear) {
   using F = typename MeshT::family;
   constexpr int S = MeshT::space_dim;
   hom::cad::CurveOptions co;
@@ -102,9 +106,12 @@ int curve_and_write(const hom::cad::CadModel& cad, const MeshT& linear, const Cu
     std::fflush(stdout);
   };
   const std::string kind = MeshT::dim == 3 ? "volume" : S == 2 ? "planar" : "surface";
-  std::printf("linear %s mesh: %d %s elements, %d nodes (%.2f s)\n", kind.c_str(), linear.num_elements(),
-              std::string(F::name).c_str(), linear.num_nodes(), t_linear);
-  auto r = hom::cad::curve_mesh<F, S>(cad, linear, co);
+  const bool curved = input.degree() > 1;
+  std::printf("%s %s mesh: %d %s elements of degree %d, %d nodes (%.2f s)\n", curved ? "curved" : "linear",
+              kind.c_str(), input.num_elements(), std::string(F::name).c_str(), input.degree(), input.num_nodes(),
+              t_linear);
+  if (curved) co.p = input.degree();
+  auto r = curved ? hom::cad::optimize_on_cad<F, S>(cad, input, co) : hom::cad::curve_mesh<F, S>(cad, input, co);
   if (!r.stages.empty()) r.stages.front().time_s += t_linear;
   // det D phi is also sampled at the nodes (the scaled Jacobian): a
   // negative value there is a fold that no quadrature point sees (typically
@@ -139,7 +146,7 @@ int curve_and_write(const hom::cad::CadModel& cad, const MeshT& linear, const Cu
       // The surface part of a volume mesh is its boundary triangles.
       const std::string family = s.part == "surface" ? std::string(MeshT::dim == 3 ? "triangle" : F::name)
                                                      : std::string(F::name);
-      hom::io::CaseHeader h{cad.name(), family, o.p, s.elements, s.nodes, s.stage, o.measure, "straight-sided"};
+      hom::io::CaseHeader h{cad.name(), family, co.p, s.elements, s.nodes, s.stage, o.measure, "straight-sided"};
       auto c = hom::io::quality_case(h, s.quality, s.scaled_jacobian);
       c.set("part", s.part)
           .set("time_s", s.time_s)
@@ -232,7 +239,7 @@ void classify_user_mesh(MeshT& mesh, const hom::cad::CadModel& cad, double toler
     using F = typename MeshT::family;
     typename hom::Mesh<F, hom::WarpBlend, 3>::Coordinates X = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
     X.topRows(2) = mesh.nodes();
-    hom::Mesh<F, hom::WarpBlend, 3> lifted(1, X, mesh.elements());
+    hom::Mesh<F, hom::WarpBlend, 3> lifted(mesh.degree(), X, mesh.elements());
     hom::cad::classify(lifted, cad, tolerance);
     mesh.node_classes() = lifted.node_classes();
     mesh.element_entities() = lifted.element_entities();
@@ -246,20 +253,24 @@ void classify_user_mesh(MeshT& mesh, const hom::cad::CadModel& cad, double toler
 int run(int argc, char** argv) {
   CurveCli o;
   po::options_description opts(
-      "hom curve [MODEL.step|.iges|.brep] [--mesh LINEAR.msh] [--p P] [-o OUT.msh] [options]\n\n"
+      "hom curve [MODEL.step|.iges|.brep] [--mesh LINEAR.msh] [--p P] [-o OUT.msh] [options]\n"
+      "hom curve MODEL --mesh CURVED.msh -o OUT.msh [options]   (optimize a curved mesh on the model)\n\n"
       "Generate a curved high-order mesh from CAD (thesis chapter 6): a linear mesh of the model\n"
       "(Gmsh, or --mesh), elevated to degree P, boundary nodes put on the CAD (edges at\n"
       "Gauss-Lobatto positions in arc length, faces blended in parameter space and optimized on\n"
       "the surface, chapter 5), the volume optimized (chapter 4). Without MODEL: the built-in cube\n"
       "with a spherical cavity. Solids give tetrahedra, planar models a planar mesh in z = 0,\n"
       "other models a surface mesh. The result is checked (all elements valid, boundary nodes on\n"
-      "the CAD) before it is written; an invalid result writes nothing.\n"
+      "the CAD) before it is written; an invalid result writes nothing. A curved --mesh (degree\n"
+      "> 1, e.g. written by hom curve) is only optimized: face nodes slide on their CAD surfaces\n"
+      "(chapter 5), interior nodes move (chapter 4), CAD-edge nodes stay.\n"
       "Exit status: 0 valid mesh written, 3 invalid result (nothing written), 1 unreadable\n"
       "input or meshing failure, 2 bad options.\n\noptions");
   opts.add_options()("help,h", "show this help")                                                     //
       ("p", po::value(&o.p)->default_value(2), "polynomial degree (>= 2)")                                             //
       ("output,o", po::value(&o.out)->default_value("curved.msh"), "curved mesh (.msh, MSH 4.1)")                                 //
-      ("mesh", po::value(&o.mesh), "linear mesh to curve instead of meshing the model (.msh)")       //
+      ("mesh", po::value(&o.mesh),
+       "linear mesh to curve instead of meshing the model, or curved mesh to optimize on it (.msh)")       //
       ("size", po::value(&o.size)->default_value(0.0), "element size (0: model size / 20)")          //
       ("size-curvature", po::value(&o.size_curvature)->default_value(0),
        "elements per 2 pi radians of curvature (0: off)")                                            //
@@ -280,6 +291,7 @@ int run(int argc, char** argv) {
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per optimizer iteration (stderr)");
   po::variables_map vm;
   if (!hom::tools::parse_options("curve", argc, argv, opts, {{"model", po::value(&o.model)}}, vm)) return 0;
+  o.p_given = vm.count("p") && !vm["p"].defaulted();
   check_options(o);
 
   hom::cad::CadModel cad =
@@ -309,9 +321,10 @@ int run(int argc, char** argv) {
         throw hom::tools::UsageError("curve: " + o.mesh + " is a hexahedral mesh; hom curve handles tetrahedra, and "
                                      "triangles or quadrilaterals on surfaces or in the plane");
       } else {
-        if (mesh.degree() != 1)
-          throw hom::io::IoError(o.mesh + ": a linear mesh is needed, the file's elements are of degree " +
-                                 std::to_string(mesh.degree()));
+        if (mesh.degree() > 1 && o.p_given && o.p != mesh.degree())
+          throw hom::tools::UsageError("curve: " + o.mesh + " is already curved (degree " +
+                                       std::to_string(mesh.degree()) + "); --p " + std::to_string(o.p) +
+                                       " cannot change it (leave --p out to optimize it on the model)");
         classify_user_mesh(mesh, cad, o.tolerance * cad.size());
         return curve_and_write(cad, mesh, o, elapsed());
       }
