@@ -30,6 +30,7 @@
 #include "hom/io/msh.hpp"
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
+#include "hom/mesh/boundary_layer.hpp"
 #include "hom/mesh/coloring.hpp"
 #include "hom/mesh/elevate.hpp"
 #include "hom/mesh/mesh.hpp"

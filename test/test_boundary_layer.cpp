@@ -1,0 +1,356 @@
+// Boundary-layer insertion (include/hom/mesh/boundary_layer.hpp): on
+// structured simplex meshes of the unit square / cube with one or two sides
+// as wall, the inserted mesh is conformal, positively oriented, fills the same
+// domain with the same boundary (the wall refined), has the template element
+// counts, and its ideal layer elements have the prescribed heights.
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include "hom/mesh/boundary_layer.hpp"
+#include "hom/mesh/elevate.hpp"
+#include "hom/geometry/circle.hpp"
+#include "hom/geometry/plane.hpp"
+#include "hom/optimize/boundary_layer_pipeline.hpp"
+#include "hom/mesh/structured.hpp"
+#include "hom/mesh/topology.hpp"
+
+namespace {
+
+template <int Dim>
+using SimplexMesh = hom::Mesh<hom::Simplex<Dim>>;
+
+template <int Dim>
+double factorial() {
+  return Dim == 2 ? 2.0 : 6.0;
+}
+
+template <int Dim>
+double signed_volume(const Eigen::Matrix<double, Dim, Dim + 1>& v) {
+  Eigen::Matrix<double, Dim, Dim> J;
+  for (int k = 0; k < Dim; ++k) J.col(k) = v.col(k + 1) - v.col(0);
+  return J.determinant() / factorial<Dim>();
+}
+
+template <int Dim>
+Eigen::Matrix<double, Dim, Dim + 1> vertices(const SimplexMesh<Dim>& m, int e) {
+  Eigen::Matrix<double, Dim, Dim + 1> v;
+  for (int k = 0; k <= Dim; ++k) v.col(k) = m.node(m.vertex(e, k));
+  return v;
+}
+
+template <int Dim>
+double facet_measure(const SimplexMesh<Dim>& m, const std::array<int, Dim>& f) {
+  if constexpr (Dim == 2)
+    return (m.node(f[1]) - m.node(f[0])).norm();
+  else
+    return 0.5 * (m.node(f[1]) - m.node(f[0])).cross(m.node(f[2]) - m.node(f[0])).norm();
+}
+
+/// Total measure of the classified boundary facets per entity tag.
+template <int Dim>
+std::map<int, double> boundary_measure(const SimplexMesh<Dim>& m) {
+  std::map<int, double> out;
+  for (const auto& f : m.boundary_facets()) out[f.entity_tag] += facet_measure<Dim>(m, f.vertices);
+  return out;
+}
+
+template <int Dim>
+int count_tag(const SimplexMesh<Dim>& m, int tag) {
+  int n = 0;
+  for (const auto& f : m.boundary_facets()) n += f.entity_tag == tag;
+  return n;
+}
+
+/// Tag of the box side x_axis = lo (structured.hpp's tag rule).
+template <int Dim>
+int side_tag(int axis) {
+  hom::detail::BoxState<Dim> s{};
+  s.fill(2);
+  s[axis] = 0;
+  return hom::detail::box_entity_tag<Dim>(s);
+}
+
+template <int Dim>
+SimplexMesh<Dim> box(int n) {
+  std::array<int, Dim> cells{};
+  cells.fill(n);
+  return hom::structured_mesh<hom::Simplex<Dim>>(cells);
+}
+
+/// The properties every insertion must have (file comment).
+template <int Dim>
+void check_insertion(const SimplexMesh<Dim>& in, const std::vector<int>& walls, const hom::BoundaryLayerOptions& o) {
+  const auto bl = hom::insert_boundary_layer(in, walls, o);
+  const auto& m = bl.mesh;
+  int T = 0;
+  for (int w : walls) T += count_tag<Dim>(in, w);
+  const int per_facet = Dim == 3 ? 12 * (o.layers - 1) + 7 : 4 * (o.layers - 1) + 3;
+  CHECK(bl.num_wall_facets == T);
+  CHECK(bl.num_original_elements == in.num_elements());
+  CHECK(m.num_elements() == in.num_elements() + T * per_facet);
+  REQUIRE(bl.ideal.size() == m.num_elements());
+  REQUIRE(int(bl.level.size()) == m.num_elements());
+
+  // Positive volumes, same total volume.
+  double volume = 0.0, min_volume = 1e300;
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const double v = signed_volume<Dim>(vertices<Dim>(m, e));
+    volume += v;
+    min_volume = std::min(min_volume, v);
+  }
+  CHECK(min_volume > 0.0);
+  CHECK(volume == doctest::Approx(1.0).epsilon(1e-12));
+
+  // Conformal: Topology accepts it (no facet of three elements), the facets
+  // with one element are exactly the classified boundary, which covers each
+  // side with the same measure as before, and the complex is still a ball.
+  const hom::Topology<hom::Simplex<Dim>> topo(m);
+  CHECK(topo.euler_characteristic() == hom::Topology<hom::Simplex<Dim>>(in).euler_characteristic());
+  std::set<std::array<int, Dim>> classified;
+  for (const auto& f : m.boundary_facets()) {
+    auto k = f.vertices;
+    std::sort(k.begin(), k.end());
+    classified.insert(k);
+  }
+  CHECK(classified.size() == m.boundary_facets().size());
+  CHECK(topo.boundary_facets().size() == m.boundary_facets().size());
+  for (const auto& r : topo.boundary_facets()) {
+    std::array<int, Dim> k{};
+    const auto lv = hom::facet_vertices<hom::Simplex<Dim>>(r.local);
+    for (int i = 0; i < Dim; ++i) k[i] = m.vertex(r.element, lv[i]);
+    std::sort(k.begin(), k.end());
+    CHECK(classified.count(k) == 1);
+  }
+  const auto before = boundary_measure<Dim>(in), after = boundary_measure<Dim>(m);
+  REQUIRE(before.size() == after.size());
+  for (const auto& [tag, measure] : before) CHECK(after.at(tag) == doctest::Approx(measure).epsilon(1e-12));
+  for (int w : walls) CHECK(count_tag<Dim>(m, w) == (Dim == 3 ? 4 : 2) * count_tag<Dim>(in, w));
+  // A classified facet names its element's local facet.
+  for (const auto& f : m.boundary_facets()) {
+    const auto lv = hom::facet_vertices<hom::Simplex<Dim>>(f.local_facet);
+    std::set<int> a(f.vertices.begin(), f.vertices.end()), b;
+    for (int l : lv) b.insert(m.vertex(f.element, l));
+    CHECK(a == b);
+  }
+
+  // Wall nodes stay where the wall was: on a side x_axis = 0.
+  for (int n : bl.wall_nodes) {
+    bool on_some_wall = false;
+    for (int a = 0; a < Dim; ++a) on_some_wall = on_some_wall || std::abs(m.node(n)[a]) < 1e-15;
+    CHECK(on_some_wall);
+  }
+
+  // Ideals: original elements keep their input vertices; layer elements of
+  // level k span exactly [H_k, H_{k+1}] along the wall normal (single wall:
+  // the first listed axis) and are positive.
+  double max_ar = 0.0;
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const auto& I = bl.ideal.vertices(e);
+    CHECK(signed_volume<Dim>(I) > 0.0);
+    if (!bl.is_layer(e)) {
+      REQUIRE(e < in.num_elements());
+      CHECK((I - vertices<Dim>(in, e)).norm() == 0.0);
+      continue;
+    }
+    CHECK(e >= in.num_elements());
+    max_ar = std::max(max_ar, hom::simplex_aspect_ratio<Dim>(I));
+    if (walls.size() != 1) continue;
+    int axis = 0;
+    for (int a = 0; a < Dim; ++a)
+      if (side_tag<Dim>(a) == walls[0]) axis = a;
+    const int k = *bl.level[e];
+    const double lo = I.row(axis).minCoeff(), hi = I.row(axis).maxCoeff();
+    CHECK(lo == doctest::Approx(o.cumulative_height(k)).epsilon(1e-12));
+    CHECK(hi - lo == doctest::Approx(o.level_height(k)).epsilon(1e-10));
+  }
+  CHECK(bl.max_aspect_ratio == doctest::Approx(max_ar));
+  CHECK(bl.total_height == doctest::Approx(o.total_height()));
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("boundary layer: conformal, valid, same domain, prescribed heights", Dim, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int D = Dim::value;
+  const auto in = box<D>(D == 2 ? 3 : 2);
+  for (int layers : {1, 2, 4})
+    for (double growth : {1.0, 2.0}) {
+      CAPTURE(layers);
+      CAPTURE(growth);
+      hom::BoundaryLayerOptions o{.first_height = 0.01, .growth = growth, .layers = layers};
+      check_insertion<D>(in, {side_tag<D>(D - 1)}, o);  // the side x_last = 0
+      check_insertion<D>(in, {side_tag<D>(0)}, o);      // x_0 = 0
+      // Two walls meeting at a right angle share the layer along their edge.
+      check_insertion<D>(in, {side_tag<D>(0), side_tag<D>(1)}, o);
+    }
+}
+
+TEST_CASE_TEMPLATE("boundary layer: the thinner the first level, the larger the aspect ratio", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int D = Dim::value;
+  const auto in = box<D>(2);
+  double previous = 0.0;
+  for (double h : {1e-2, 1e-3, 1e-4}) {
+    hom::BoundaryLayerOptions o{.first_height = h, .growth = 2.0, .layers = 3};
+    const auto bl = hom::insert_boundary_layer(in, {side_tag<D>(0)}, o);
+    // A level-0 element has height h and an edge of at least a quarter of a
+    // cell side (the wall facets are halved or quartered).
+    CHECK(bl.max_aspect_ratio >= 0.25 / h);
+    CHECK(bl.max_aspect_ratio > previous);
+    previous = bl.max_aspect_ratio;
+  }
+}
+
+TEST_CASE("boundary layer: aspect ratio of regular simplices and invariance") {
+  const auto tri = hom::regular_ideal_vertices<hom::Simplex<2>>();
+  const auto tet = hom::regular_ideal_vertices<hom::Simplex<3>>();
+  CHECK(hom::simplex_aspect_ratio<2>(tri) == doctest::Approx(2.0 / std::sqrt(3.0)));
+  CHECK(hom::simplex_aspect_ratio<3>(tet) == doctest::Approx(std::sqrt(1.5)));
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  Eigen::Matrix<double, 3, 4> v;
+  v << 0, 1, 0.3, 0.2, 0, 0, 1, 0.4, 0, 0, 0, 0.05;
+  const Eigen::Matrix<double, 3, 4> w = (3.0 * R * v).colwise() + Eigen::Vector3d(1, -2, 5);
+  CHECK(hom::simplex_aspect_ratio<3>(w) == doctest::Approx(hom::simplex_aspect_ratio<3>(v)));
+  Eigen::Matrix<double, 3, 4> flat = v;
+  flat.row(2).setZero();
+  CHECK(std::isinf(hom::simplex_aspect_ratio<3>(flat)));
+}
+
+TEST_CASE("boundary layer: bad input throws") {
+  const auto in = box<3>(1);
+  const int wall = side_tag<3>(2);
+  auto insert = [&](hom::BoundaryLayerOptions o) { return hom::insert_boundary_layer(in, {wall}, o); };
+  CHECK_THROWS_AS(insert({.first_height = 0.0}), std::invalid_argument);
+  CHECK_THROWS_AS(insert({.first_height = -1.0}), std::invalid_argument);
+  CHECK_THROWS_AS(insert({.first_height = 0.1, .growth = 0.5}), std::invalid_argument);
+  CHECK_THROWS_AS(insert({.first_height = 0.1, .layers = 0}), std::invalid_argument);
+  CHECK_THROWS_AS(insert({.first_height = 0.1, .extrusion_fraction = 0.0}), std::invalid_argument);
+  CHECK_THROWS_WITH_AS(insert({.first_height = 0.1, .growth = 0.5}), doctest::Contains("growth"), std::invalid_argument);
+  CHECK_THROWS_AS(hom::insert_boundary_layer(in, {999}, {.first_height = 0.1}), std::invalid_argument);
+  CHECK_THROWS_AS(hom::insert_boundary_layer(in, {}, {.first_height = 0.1}), std::invalid_argument);
+  CHECK_THROWS_AS(hom::insert_boundary_layer(hom::elevate(in, 2), {wall}, {.first_height = 0.1}), std::invalid_argument);
+  CHECK_NOTHROW(insert({.first_height = 0.1, .growth = 1.0, .layers = 1}));
+}
+
+TEST_CASE("boundary layer: classification of the new nodes") {
+  const auto in = box<3>(2);
+  const int wall = side_tag<3>(2);
+  const auto bl = hom::insert_boundary_layer(in, {wall}, {.first_height = 0.01, .layers = 3});
+  const auto& m = bl.mesh;
+  // Wall copies keep the original's class; the moved originals are free
+  // inside and stay on the side planes on the border.
+  for (int n : bl.wall_nodes) {
+    const auto& c = m.node_class(n);
+    CHECK(c.kind != hom::NodeKind::free);
+  }
+  for (int n : bl.moved_nodes) {
+    const auto x = m.node(n);
+    const bool border = x[0] == 0.0 || x[0] == 1.0 || x[1] == 0.0 || x[1] == 1.0;
+    CHECK((m.node_class(n).kind == hom::NodeKind::free) == !border);
+    CHECK(x[2] == doctest::Approx(0.1 * bl.total_height));
+    CHECK(bl.full_height_positions(2, n) == doctest::Approx(bl.total_height));
+    CHECK(std::count(bl.border_nodes.begin(), bl.border_nodes.end(), n) == (border ? 1 : 0));
+  }
+  // The original elements' nodes off the wall are untouched.
+  for (int n = 0; n < in.num_nodes(); ++n)
+    if (std::find(bl.moved_nodes.begin(), bl.moved_nodes.end(), n) == bl.moved_nodes.end())
+      CHECK((m.node(n) - in.node(n)).norm() == 0.0);
+}
+
+// --- the pipeline (include/hom/optimize/boundary_layer_pipeline.hpp) --------
+
+namespace {
+
+/// Quarter annulus 0.5 <= r <= 1.5, 0 <= theta <= pi / 2 of triangles: the
+/// structured (r, theta) box mapped to Cartesian coordinates (det = r > 0
+/// keeps the orientation); the inner circle (side r = lo) is the wall.
+SimplexMesh<2> quarter_annulus(int nr, int nt) {
+  auto m = hom::structured_mesh<hom::Simplex<2>>({nr, nt}, Eigen::Vector2d(0.5, 0.0),
+                                                 Eigen::Vector2d(1.5, std::numbers::pi / 2));
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const Eigen::Vector2d q = m.node(i);
+    m.node(i) = Eigen::Vector2d(q[0] * std::cos(q[1]), q[0] * std::sin(q[1]));
+  }
+  m.reset_ideal();
+  return m;
+}
+
+template <int Dim>
+void check_pipeline(const hom::BoundaryLayerPipelineResult<Dim>& r, const SimplexMesh<Dim>& in,
+                    const hom::BoundaryLayerPipelineOptions& o) {
+  REQUIRE(r.stages.size() == 5);
+  const char* names[] = {"inviscid", "inserted", "smoothed", "curved", "optimized"};
+  const int per_facet = Dim == 3 ? 12 * (o.layer.layers - 1) + 7 : 4 * (o.layer.layers - 1) + 3;
+  for (int s = 0; s < 5; ++s) {
+    CAPTURE(s);
+    CHECK(r.stages[s].name == names[s]);
+    CHECK(r.stages[s].elements == (s == 0 ? in.num_elements() : in.num_elements() + r.layer.num_wall_facets * per_facet));
+    CHECK(r.stages[s].p == (s < 3 ? 1 : o.p));
+  }
+  // The inviscid mesh is its own ideal.
+  CHECK(r.stages[0].quality.min == doctest::Approx(1.0));
+  CHECK(r.stages[0].quality.inverted == 0);
+  // Smoothing against the stretched ideal improves the inserted topology,
+  // and the result is valid.
+  CHECK(r.stages[2].quality.inverted == 0);
+  CHECK(r.stages[2].quality.min > r.stages[1].quality.min);
+  CHECK(r.stages[2].quality.mean > r.stages[1].quality.mean);
+  CHECK(r.stages[4].quality.inverted == 0);
+  CHECK(r.stages[4].quality.min > 0.0);
+  CHECK(r.stages[4].quality.min >= r.stages[3].quality.min - 1e-12);
+  CHECK(r.valid);
+  CHECK(r.mesh.degree() == o.p);
+}
+
+}  // namespace
+
+TEST_CASE("boundary layer pipeline: 2D quarter annulus, curved circular wall") {
+  const auto in = quarter_annulus(4, 8);
+  const int wall = side_tag<2>(0);  // r = 0.5
+  hom::GeometryModel<2> g;
+  g.add_curve(wall, hom::Circle<2>(Eigen::Vector2d::Zero(), 0.5));
+  hom::BoundaryLayerPipelineOptions o;
+  o.layer = {.first_height = 0.01, .growth = 2.0, .layers = 3};
+  o.p = 3;
+  const auto r = hom::boundary_layer_pipeline<2>(in, {wall}, g, o);
+  check_pipeline<2>(r, in, o);
+  // Every node of the final wall lies on the circle.
+  int on_wall = 0;
+  for (const auto& f : r.mesh.boundary_facets())
+    if (f.entity_tag == wall)
+      for (int n : r.mesh.facet_node_ids(f)) {
+        CHECK(r.mesh.node(n).norm() == doctest::Approx(0.5).epsilon(1e-12));
+        ++on_wall;
+      }
+  CHECK(on_wall > 0);
+  // After smoothing, the first level has (about) its prescribed height: the
+  // level-0 elements' vertices lie within [0, h0] of the wall, with some at h0.
+  double top = 0.0;
+  for (int e = 0; e < r.smoothed.num_elements(); ++e)
+    if (r.layer.level[e] == 0)
+      for (int v = 0; v < 3; ++v) top = std::max(top, r.smoothed.node(r.smoothed.vertex(e, v)).norm() - 0.5);
+  CHECK(top == doctest::Approx(o.layer.first_height).epsilon(0.2));
+}
+
+TEST_CASE("boundary layer pipeline: 3D cube, flat wall") {
+  const auto in = box<3>(2);
+  const int wall = side_tag<3>(2);  // z = 0
+  hom::GeometryModel<3> g;
+  g.add_surface(wall, hom::Plane(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
+  hom::BoundaryLayerPipelineOptions o;
+  o.layer = {.first_height = 0.02, .growth = 2.0, .layers = 2};
+  o.p = 2;
+  const auto r = hom::boundary_layer_pipeline<3>(in, {wall}, g, o);
+  check_pipeline<3>(r, in, o);
+  // A flat wall: curving moves nothing, so (d) is (c) elevated, quality 1.
+  CHECK(r.stages[3].quality.min == doctest::Approx(1.0));
+}
