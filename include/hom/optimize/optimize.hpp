@@ -16,7 +16,8 @@
 /// (template arguments). Run-time choices (OptimizeOptions): the solver
 /// (NewtonSolver, MatrixFreeNewton, GaussSeidel), the ideal (straight-sided
 /// or regular, or a user IdealMesh through the second overload), the
-/// p-continuation of appendix C, threads, tolerances and progress output.
+/// p-continuation of appendix C, threads, tolerances and progress output,
+/// and certification as the final acceptance test (certified.hpp).
 /// For other solver settings call `optimize_with` with policy objects.
 
 #include <chrono>
@@ -28,6 +29,7 @@
 
 #include "hom/measure/shape_measure.hpp"
 #include "hom/mesh/mesh.hpp"
+#include "hom/optimize/certified.hpp"
 #include "hom/optimize/continuation.hpp"
 #include "hom/optimize/gauss_seidel.hpp"
 #include "hom/optimize/matrix_free_newton.hpp"
@@ -83,8 +85,28 @@ struct OptimizeOptions {
   /// Which elements are regularized while the mesh is invalid (problem.hpp).
   RegularizationScope regularization_scope = RegularizationScope::invalid_elements;
   Regularization regularization() const { return {regularization_alpha, regularization_scope}; }
+  /// Certification as the final acceptance test (issue 8, certified.hpp):
+  /// after the high-order stage, certify every element (Bernstein bounds of
+  /// det D phi_P, subdivision depth <= certify_depth) and repair the
+  /// uncertified ones in up to certify_rounds local rounds, with the failing
+  /// points added to their quadrature as sentinels of relative weight
+  /// certify_sentinel_weight. Off by default: the normal stage is unchanged
+  /// either way; on a mesh that certifies valid the stage costs one certification.
+  bool certify = false;
+  int certify_depth = CertifyOptions{}.max_depth;
+  int certify_rounds = CertifyRepairOptions{}.max_rounds;
+  double certify_sentinel_weight = CertifyRepairOptions{}.sentinel_weight;
   bool verbose = false;
   std::function<void(const IterationInfo&)> on_iteration;
+
+  CertifyRepairOptions certify_repair_options() const {
+    CertifyRepairOptions o;
+    o.certify.max_depth = certify_depth;
+    o.certify.threads = threads;
+    o.max_rounds = certify_rounds;
+    o.sentinel_weight = certify_sentinel_weight;
+    return o;
+  }
 
   SolverOptions solver_options() const {
     SolverOptions o;
@@ -104,9 +126,15 @@ struct OptimizeOptions {
 struct OptimizeResult {
   std::optional<SolverResult> continuation;  ///< the continuation stage(s), when they ran
   std::string continuation_policy;           ///< its policy's name ("none", "linear-sub-mesh", "vertex-mesh")
-  SolverResult result;                       ///< the high-order optimization
-  double time_s = 0.0;                       ///< both stages
+  /// The high-order optimization. With a certify stage that moved nodes,
+  /// `inverted` and `min_quality` are those of the final mesh.
+  SolverResult result;
+  /// The certify stage (OptimizeOptions::certify), when it ran.
+  std::optional<CertificationOutcome> certification;
+  double time_s = 0.0;                       ///< all stages
 
+  /// Every element certified valid (false when the certify stage did not run).
+  bool certified() const { return certification && certification->certified(); }
   bool converged() const { return result.converged; }
   int inverted() const { return result.inverted; }
   double min_quality() const { return result.min_quality; }
@@ -136,6 +164,16 @@ OptimizeResult optimize_with(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMes
   problem.set_regularization(options.regularization());
   out.result = solver.solve(problem, so);
   mesh.nodes() = problem.coordinates();
+  if (options.certify) {
+    out.certification = certify_and_repair<Measure, Q>(mesh, ideal, solver, so, options.certify_repair_options(),
+                                                       options.threads, options.regularization(), measure);
+    if (out.certification->rounds > 0) {  // the repair moved nodes: report the final mesh's state
+      problem.coordinates() = mesh.nodes();
+      const MeshState state = problem.status(problem.coordinates());
+      out.result.inverted = state.inverted;
+      out.result.min_quality = state.min_quality;
+    }
+  }
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

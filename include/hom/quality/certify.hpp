@@ -90,6 +90,11 @@ struct ElementCertificate {
   int pieces = 0;  ///< pieces of the final partition (1: decided without subdivision)
   std::optional<Point> invalid_point;  ///< reference coordinates where det <= tol was attained
   double invalid_value = std::numeric_limits<double>::quiet_NaN();  ///< det there
+  /// Set when a piece stayed undecided at max_depth (always for undecided
+  /// elements): the reference point of the smallest coefficient of the lowest
+  /// such piece (its domain point), where det comes closest to 0 among the
+  /// points examined; the optimizer's certify stage watches it (certified.hpp).
+  std::optional<Point> weakest_point;
   double min_det_bound = 0.0;   ///< <= det D phi_P everywhere in the element
   double max_det_bound = 0.0;   ///< >= det D phi_P everywhere in the element
   double max_vertex_det = 0.0;  ///< max |det D phi_P| at the vertices (attained)
@@ -212,13 +217,15 @@ ElementCertificate<Family> certify_coefficients(const BernsteinSpace<Family>& s,
         r.invalid_point = q.vertex(v);
         r.invalid_value = q.c[corners[v]];
       }
+    std::optional<typename Family::Point> lowest;  // reference point of the smallest coefficient
     if (!r.invalid_point) {
       Eigen::Index imin;
       q.c.minCoeff(&imin);
       const auto x = s.domain_point(static_cast<int>(imin));
       const double value = s.evaluate(q.c, x);
+      lowest = q.to_reference(x);
       if (value <= tol) {
-        r.invalid_point = q.to_reference(x);
+        r.invalid_point = lowest;
         r.invalid_value = value;
       }
     }
@@ -227,6 +234,7 @@ ElementCertificate<Family> certify_coefficients(const BernsteinSpace<Family>& s,
       break;
     }
     if (q.depth >= o.max_depth) {
+      if (!r.weakest_point) r.weakest_point = lowest;  // pieces leave the queue lowest first
       undecided.push_back(std::move(q));
       continue;
     }

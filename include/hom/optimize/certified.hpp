@@ -1,0 +1,359 @@
+#pragma once
+/// @file certified.hpp
+/// Certification as the optimizer's final acceptance test (issue 8).
+///
+/// The objective (eq 4.10) and the validity test of the line search and of the
+/// regularization (section 4.2.2) see det D phi_P only at the quadrature
+/// points, so an optimized element can be valid there and still fold between
+/// them (proposition 3.1 says no more); the known real case is a fold at a
+/// corner node, which no interior quadrature point sees. `certify_and_repair`
+/// certifies every element (quality/certify.hpp) and, while some element is
+/// certified invalid or undecided, runs repair rounds:
+///
+///   1. Sentinel points. The reference points where certification found
+///      det <= 0 (invalid_point) or came closest to it (weakest_point), with
+///      the reference vertices from the first round on, are appended to the
+///      quadrature rule with a small weight (sentinel_weight times the mean
+///      weight). The points are reference coordinates, shared by every element
+///      of the round's problem: one tabulation, as in the normal stage.
+///      Through the rule a sentinel enters everything that reads quadrature
+///      points: the objective (its (eta - 1)^2 term), the validity test
+///      (MeshState, so an element with det <= 0 at a sentinel is regularized
+///      as invalid, eqs 4.12-4.14, until det > 0 there) and the line search's
+///      barrier (sigma_0 returns +inf at a sentinel too, so no accepted step
+///      folds a valid element at its sentinels).
+///   2. A local problem. Free: the free nodes of the failing elements and of
+///      the elements sharing a node with them (a corner fold is often fixed by
+///      an edge node of the neighbour). Problem: every element that has a free
+///      node, everything else held. Solved by the normal stage's solver.
+///   3. Acceptance. The round's elements are certified again. A round that
+///      leaves more elements invalid at the quadrature points, or more
+///      elements uncertified, than before it is undone, and the stage stops.
+///
+/// Elements that cannot be repaired are left out: det at a point depends only
+/// on the nodes whose shape functions have a non-zero gradient there, so an
+/// element certified invalid at a point where all of those nodes are held
+/// (boundary nodes: a sliver whose nodes all lie on the curved boundary)
+/// keeps det <= 0 there whatever the free nodes do.
+///
+/// It stops when every element is certified valid, after max_rounds rounds,
+/// when a round would learn no new sentinel point (the same problem again),
+/// when the failing elements are all held or have no free node nearby, or on
+/// an undone round (RepairStop). If the rounds end with no fewer uncertified
+/// elements than they started with, the mesh is restored to the normal
+/// stage's result: the stage never trades quality for nothing. Elements certified valid at the start of a round are the
+/// only ones the barrier protects at their sentinels; a neighbour that
+/// becomes uncertified between its points is caught by the next
+/// certification. On a mesh that certifies valid the stage costs one
+/// certification and moves nothing. The normal stage's kernels are not
+/// touched: the extra points exist only in the small local problems.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "hom/basis/lagrange.hpp"
+#include "hom/mesh/mesh.hpp"
+#include "hom/optimize/element_objective.hpp"
+#include "hom/optimize/mesh_problem.hpp"
+#include "hom/optimize/problem.hpp"
+#include "hom/optimize/solver.hpp"
+#include "hom/quadrature/quadrature_policy.hpp"
+#include "hom/quality/certify.hpp"
+#include "hom/quality/tabulation.hpp"
+
+namespace hom {
+
+/// Why the certify stage stopped.
+enum class RepairStop {
+  certified,      ///< every element certified valid
+  round_limit,    ///< max_rounds repair rounds ran
+  no_progress,    ///< no new sentinel point to add: another round would solve the same problem
+  no_free_nodes,  ///< the uncertified elements have no free node within one element
+  held,           ///< each uncertified element folds at a point where only held nodes determine det
+  worse,          ///< the last round left more elements invalid or uncertified; it was undone
+};
+
+inline std::string_view to_string(RepairStop s) {
+  switch (s) {
+    case RepairStop::certified: return "certified";
+    case RepairStop::round_limit: return "round limit";
+    case RepairStop::no_progress: return "no new sentinel point";
+    case RepairStop::no_free_nodes: return "no free nodes";
+    case RepairStop::held: return "fold fixed by held nodes";
+    case RepairStop::worse: return "round undone";
+  }
+  return "?";
+}
+
+struct CertifyRepairOptions {
+  CertifyOptions certify;        ///< subdivision depth, tolerance, threads
+  int max_rounds = 4;            ///< repair rounds at most (0: certify only)
+  double sentinel_weight = 0.1;  ///< a sentinel point's weight / the rule's mean weight
+};
+
+/// What the certify stage found and did.
+struct CertificationOutcome {
+  int initial_valid = 0, initial_invalid = 0, initial_undecided = 0;  ///< certificate before any repair
+  int valid = 0, invalid = 0, undecided = 0;                          ///< final certificate
+  double min_scaled_jacobian = std::numeric_limits<double>::infinity();  ///< final certified lower bound
+  int rounds = 0;             ///< repair rounds kept or undone
+  int sentinel_points = 0;    ///< sentinel points of the last round
+  RepairStop reason = RepairStop::certified;
+  /// The rounds left no fewer uncertified elements than they started with,
+  /// so the mesh was put back as the normal stage left it.
+  bool restored = false;
+  std::vector<int> uncertified;       ///< elements not certified valid at the end, ascending
+  std::vector<SolverResult> repairs;  ///< each round's local solve
+  double time_s = 0.0;                ///< certification and repair
+
+  bool certified() const { return invalid == 0 && undecided == 0; }
+};
+
+/// The tabulation of `base` followed by `sentinels` (reference points), each
+/// of weight `weight`. No sum factorization: the rule is no longer a
+/// collapsed tensor rule.
+template <ElementFamily Family, NodeSet Nodes>
+Tabulation<Family> sentinel_tabulation(int p, const QuadratureRule<Family::dim>& base,
+                                       const std::vector<typename Family::Point>& sentinels, double weight) {
+  QuadratureRule<Family::dim> rule = base;
+  for (const auto& x : sentinels) {
+    rule.points.push_back(x);
+    rule.weights.push_back(weight);
+  }
+  rule.name = base.name + " + " + std::to_string(sentinels.size()) + " sentinel points";
+  Tabulation<Family> t = make_tabulation<Family, Nodes>(p, rule);
+  t.sum_factorization.reset();
+  return t;
+}
+
+namespace detail {
+
+struct CertifyCounts {
+  int valid = 0, invalid = 0, undecided = 0;
+};
+
+template <class Certificates>
+CertifyCounts count_certificates(const Certificates& c) {
+  CertifyCounts n;
+  for (const auto& e : c) {
+    n.valid += e.status == Certificate::certified_valid;
+    n.invalid += e.status == Certificate::certified_invalid;
+    n.undecided += e.status == Certificate::undecided;
+  }
+  return n;
+}
+
+}  // namespace detail
+
+/// Certifies every element of `mesh` and repairs the uncertified ones as the
+/// file comment describes, moving free nodes of `mesh` in place. `solver`,
+/// `so`, `threads`, `regularization` and `measure` are the normal stage's.
+template <class Measure, QuadraturePolicy Q, class Solver, ElementFamily Family, NodeSet Nodes>
+CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, const IdealMesh<Family>& ideal,
+                                        const Solver& solver, SolverOptions so, const CertifyRepairOptions& o, int threads,
+                                        const Regularization& regularization, const Measure& measure = {}) {
+  using Point = typename Family::Point;
+  using Problem = OptimizationProblem<Family, Measure>;
+  const auto start = std::chrono::steady_clock::now();
+  CertifyOptions co = o.certify;
+  co.threads = threads;
+  std::vector<ElementCertificate<Family>> cert = certify_mesh(mesh, co).elements;
+  CertificationOutcome out;
+  {
+    const auto n = detail::count_certificates(cert);
+    out.initial_valid = n.valid;
+    out.initial_invalid = n.invalid;
+    out.initial_undecided = n.undecided;
+  }
+
+  const int p = mesh.degree();
+  const int ne = mesh.num_elements(), nn = mesh.num_nodes(), npe = mesh.nodes_per_element();
+  const auto& conn = mesh.elements();
+  const QuadratureRule<Family::dim>& base_rule = quadrature_for<Family, Q>(p);
+  const Tabulation<Family>& base_tab = tabulation<Family, Nodes>(p, base_rule);
+  const double weight = o.sentinel_weight * std::accumulate(base_rule.weights.begin(), base_rule.weights.end(), 0.0) /
+                        double(base_rule.size());
+  const std::vector<bool> mesh_free = free_node_mask(mesh);
+
+  // Elements of each node (CSR), built on the first round.
+  std::vector<int> offsets, node_elements;
+  auto build_node_elements = [&] {
+    offsets.assign(nn + 1, 0);
+    for (int e = 0; e < ne; ++e)
+      for (int i = 0; i < npe; ++i) ++offsets[conn(i, e) + 1];
+    for (int k = 0; k < nn; ++k) offsets[k + 1] += offsets[k];
+    node_elements.resize(offsets[nn]);
+    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+    for (int e = 0; e < ne; ++e)
+      for (int i = 0; i < npe; ++i) node_elements[fill[conn(i, e)]++] = e;
+  };
+
+  std::vector<Point> sentinels;
+  for (int v = 0; v < Family::num_vertices; ++v) sentinels.push_back(Family::vertex(v));
+  auto add_sentinel = [&](const Point& x) {
+    for (const auto& s : sentinels)
+      if ((s - x).squaredNorm() <= 1e-24) return;
+    sentinels.push_back(x);
+  };
+  std::size_t solved_with = 0;  // sentinels of the last round's problem
+  const auto& basis = lagrange_basis<Family, Nodes>(p);
+  // Whether det at the certified-invalid point of element e depends on a free node.
+  auto repairable = [&](int e) {
+    if (!cert[e].invalid_point) return true;
+    const Eigen::MatrixXd g = basis.gradient(*cert[e].invalid_point);  // n x Dim
+    const double scale = g.rowwise().norm().maxCoeff();
+    for (int i = 0; i < npe; ++i)
+      if (mesh_free[conn(i, e)] && g.row(i).norm() > 1e-12 * scale) return true;
+    return false;
+  };
+  // The normal stage's result, kept from the first round on.
+  std::optional<typename Mesh<Family, Nodes, Family::dim>::Coordinates> start_nodes;
+  std::vector<ElementCertificate<Family>> start_cert;
+
+  so.stage = "certify";
+  so.target_quality = 0.0;  // the round's quality includes its sentinels; converge instead
+  out.reason = RepairStop::certified;
+  for (;;) {
+    std::vector<int> failing;
+    bool any = false;
+    for (int e = 0; e < ne; ++e)
+      if (cert[e].status != Certificate::certified_valid) {
+        any = true;
+        if (repairable(e)) failing.push_back(e);
+      }
+    if (!any) {
+      out.reason = RepairStop::certified;
+      break;
+    }
+    if (failing.empty()) {
+      out.reason = RepairStop::held;
+      break;
+    }
+    if (out.rounds >= o.max_rounds) {
+      out.reason = RepairStop::round_limit;
+      break;
+    }
+    if (!start_nodes) {
+      start_nodes = mesh.nodes();
+      start_cert = cert;
+    }
+    for (int e : failing) {
+      if (cert[e].invalid_point) add_sentinel(*cert[e].invalid_point);
+      if (cert[e].weakest_point) add_sentinel(*cert[e].weakest_point);
+    }
+    if (sentinels.size() == solved_with) {
+      out.reason = RepairStop::no_progress;
+      break;
+    }
+
+    // The round's patch: free nodes of the failing elements and their node
+    // neighbours; the elements of those nodes.
+    if (offsets.empty()) build_node_elements();
+    std::vector<char> ring(ne, 0), free_node(nn, 0), in_problem(ne, 0);
+    for (int e : failing)
+      for (int i = 0; i < npe; ++i)
+        for (int k = offsets[conn(i, e)]; k < offsets[conn(i, e) + 1]; ++k) ring[node_elements[k]] = 1;
+    int num_free = 0;
+    for (int e = 0; e < ne; ++e)
+      if (ring[e])
+        for (int i = 0; i < npe; ++i) {
+          const int node = conn(i, e);
+          if (mesh_free[node] && !free_node[node]) {
+            free_node[node] = 1;
+            ++num_free;
+            for (int k = offsets[node]; k < offsets[node + 1]; ++k) in_problem[node_elements[k]] = 1;
+          }
+        }
+    if (num_free == 0) {
+      out.reason = RepairStop::no_free_nodes;
+      break;
+    }
+    std::vector<int> elements, nodes, local(nn, -1);
+    for (int e = 0; e < ne; ++e)
+      if (in_problem[e]) {
+        elements.push_back(e);
+        for (int i = 0; i < npe; ++i)
+          if (local[conn(i, e)] < 0) {
+            local[conn(i, e)] = int(nodes.size());
+            nodes.push_back(conn(i, e));
+          }
+      }
+    typename Problem::Coordinates X(Family::dim, Eigen::Index(nodes.size()));
+    std::vector<bool> free(nodes.size());
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      X.col(Eigen::Index(k)) = mesh.node(nodes[k]);
+      free[k] = free_node[nodes[k]] != 0;
+    }
+    typename Problem::Connectivity C(npe, Eigen::Index(elements.size()));
+    for (std::size_t b = 0; b < elements.size(); ++b)
+      for (int i = 0; i < npe; ++i) C(i, Eigen::Index(b)) = local[conn(i, elements[b])];
+
+    const Tabulation<Family> tab = sentinel_tabulation<Family, Nodes>(p, base_rule, sentinels, weight);
+    std::vector<IdealAtPoints<Family::dim>> ideals, base_ideals;
+    for (int e : elements) {
+      ideals.push_back(ideal_at_points<Family>(tab, ideal.vertices(e)));
+      base_ideals.push_back(ideal_at_points<Family>(base_tab, ideal.vertices(e)));
+    }
+    Problem problem(tab, X, C, free, std::move(ideals), measure);
+    problem.set_threads(threads);
+    problem.set_regularization(regularization);
+    const Problem at_quadrature(base_tab, X, C, free, std::move(base_ideals), measure);  // validity as the normal stage sees it
+    out.repairs.push_back(solver.solve(problem, so));
+    ++out.rounds;
+    solved_with = sentinels.size();
+    out.sentinel_points = int(sentinels.size());
+
+    // Accept the round unless it made things worse.
+    const int invalid_before = at_quadrature.status(X).inverted;
+    const int invalid_after = at_quadrature.status(problem.coordinates()).inverted;
+    for (std::size_t k = 0; k < nodes.size(); ++k)
+      if (free[k]) mesh.nodes().col(nodes[k]) = problem.coordinates().col(Eigen::Index(k));
+    std::vector<ElementCertificate<Family>> recert(elements.size());
+    {
+      const detail::SerialEigenScope serial;
+      const auto& jb = jacobian_bernstein<Family, Nodes>(p);
+      const int m = int(elements.size());
+      HOM_PARALLEL_FOR_DYNAMIC(detail::useful_threads(detail::resolve_threads(threads), m, 4))
+      for (int b = 0; b < m; ++b) recert[b] = certify_element<Family>(jb, mesh.element_coordinates(elements[b]), o.certify);
+    }
+    int uncertified_before = 0, uncertified_after = 0;
+    for (std::size_t b = 0; b < elements.size(); ++b) {
+      uncertified_before += cert[elements[b]].status != Certificate::certified_valid;
+      uncertified_after += recert[b].status != Certificate::certified_valid;
+    }
+    if (invalid_after > invalid_before || uncertified_after > uncertified_before) {
+      for (std::size_t k = 0; k < nodes.size(); ++k)
+        if (free[k]) mesh.nodes().col(nodes[k]) = X.col(Eigen::Index(k));
+      out.reason = RepairStop::worse;
+      break;
+    }
+    for (std::size_t b = 0; b < elements.size(); ++b) cert[elements[b]] = std::move(recert[b]);
+  }
+
+  auto uncertified = [](const auto& c) {
+    return std::count_if(c.begin(), c.end(), [](const auto& e) { return e.status != Certificate::certified_valid; });
+  };
+  if (out.rounds > 0 && uncertified(cert) >= uncertified(start_cert)) {
+    mesh.nodes() = *start_nodes;
+    cert = std::move(start_cert);
+    out.restored = true;
+  }
+  const auto n = detail::count_certificates(cert);
+  out.valid = n.valid;
+  out.invalid = n.invalid;
+  out.undecided = n.undecided;
+  for (int e = 0; e < ne; ++e) {
+    out.min_scaled_jacobian = std::min(out.min_scaled_jacobian, cert[e].min_scaled_jacobian);
+    if (cert[e].status != Certificate::certified_valid) out.uncertified.push_back(e);
+  }
+  out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace hom
