@@ -226,14 +226,14 @@ TEST_CASE("optimize_on_cad: face nodes slid in (u, v) come back, stay on the sur
   const auto curved = cad::curve_mesh<Simplex<2>, 3>(m, linear, options(3));
   REQUIRE(curved.valid);
   // Slide every face node along its surface by a deterministic (u, v) offset
-  // of a fifth of the parameter spacing; CAD-edge and vertex nodes stay.
+  // of a twentieth of the parameter spacing; CAD-edge and vertex nodes stay.
   auto moved = curved.mesh;
   int slid = 0;
   for (int i = 0; i < moved.num_nodes(); ++i) {
     auto& c = moved.node_class(i);
     if (!(c.entity && c.entity->dim == 2 && c.num_params == 2)) continue;
     const auto s = m.surface(c.entity->tag);
-    const double du = 0.02 * std::sin(7.0 * i), dv = 0.02 * std::cos(5.0 * i);
+    const double du = 0.005 * std::sin(7.0 * i), dv = 0.005 * std::cos(5.0 * i);
     c.params = {s.range(0).normalize(c.params[0] + du * (s.range(0).hi - s.range(0).lo)),
                 s.range(1).normalize(c.params[1] + dv * (s.range(1).hi - s.range(1).lo))};
     moved.node(i) = s.evaluate({c.params[0], c.params[1]});
