@@ -80,6 +80,61 @@ grep -q "straight-sided ideal is inverted" <<<"$err" || fail "tangled vertices: 
 [[ $rc -eq 0 ]] || fail "tangled vertices, equilateral ideal: exit $rc, expected 0"
 "$hom" quality "$work/lin.opt.msh" --ideal equilateral >/dev/null || fail "tangled vertices: output not valid"
 
+# --certify (issue 8). A curved boundary node near a corner turns the boundary
+# edge's tangent into its element: plain optimization ends valid at every
+# quadrature point (exit 0) with a fold at the corner that `hom quality
+# --certify` rejects (exit 3); `--certify` repairs it (exit 0, JSON counts
+# with hom quality's keys, the output certifies valid independently);
+# `--certify-rounds 0` only reports (exit 3).
+"$gen" make tri 3 3 "$work/fold.msh" 4.1 0.0 >/dev/null   # unperturbed interior (exits 1: nothing inverted)
+"$py" - "$work/fold.msh" <<'PY' || fail "fold: could not move the boundary node"
+import math, sys
+path = sys.argv[1]
+lines = open(path).read().split("\n")
+start = lines.index("$Nodes")
+blocks = int(lines[start + 1].split()[0])
+i, best = start + 2, None
+target = (1 / 3 + 1 / 18, 0.1 * math.sin(math.pi * (1 / 3 + 1 / 18)))
+for _ in range(blocks):
+    dim, tag, parametric, count = map(int, lines[i].split())
+    coords = i + 1 + count
+    for k in range(count):
+        x = list(map(float, lines[coords + k].split()[:3]))
+        d = math.hypot(x[0] - target[0], x[1] - target[1])
+        if dim < 2 and (best is None or d < best[0]):
+            best = (d, coords + k, x)
+    i = coords + count
+d, line, x = best
+assert d < 0.1, d
+x[0] -= 0.3 / 3
+x[1] += 0.4 / 3
+lines[line] = " ".join(repr(v) for v in x)
+open(path, "w").write("\n".join(lines))
+PY
+"$hom" optimize "$work/fold.msh" -o "$work/fold.plain.msh" --threads 1 >/dev/null 2>&1; rc=$?
+[[ $rc -eq 0 ]] || fail "fold: plain optimize exit $rc, expected 0 (valid at the quadrature points)"
+"$hom" quality "$work/fold.plain.msh" --certify >/dev/null; rc=$?
+[[ $rc -eq 3 ]] || fail "fold: hom quality --certify of the plain result exits $rc, expected 3 (a corner fold)"
+log=$("$hom" optimize "$work/fold.msh" -o "$work/fold.cert.msh" --threads 1 --certify --json "$work/fold.json" 2>&1); rc=$?
+echo "$log" | sed "s/^/  [fold] /"
+[[ $rc -eq 0 ]] || fail "fold: hom optimize --certify exit $rc, expected 0"
+grep -q "after optimization: .* [1-9][0-9]* certified invalid" <<<"$log" || fail "fold: no certificate before repair"
+grep -q "repair: [1-9]" <<<"$log" || fail "fold: no repair round reported"
+[[ $(json_field "$work/fold.json" optimized certified_invalid) -eq 0 ]] || fail "fold: json: certified_invalid"
+[[ $(json_field "$work/fold.json" optimized undecided) -eq 0 ]] || fail "fold: json: undecided"
+[[ $(json_field "$work/fold.json" optimized certified_valid) -eq $(json_field "$work/fold.json" optimized elements) ]] ||
+  fail "fold: json: certified_valid is not the element count"
+[[ $(json_field "$work/fold.json" optimized initial_certified_invalid) -gt 0 ]] || fail "fold: json: initial_certified_invalid"
+json_field "$work/fold.json" optimized certified_min_scaled_jacobian >/dev/null || fail "fold: json: no certified_min_scaled_jacobian"
+"$py" "$schema" "$work/fold.json" --tool "hom optimize" --stage initial --stage optimized || fail "fold: json: not the DESIGN.md schema"
+"$hom" quality "$work/fold.cert.msh" --certify >/dev/null || fail "fold: hom quality --certify of the repaired mesh fails"
+"$gen" fixed-match "$work/fold.msh" "$work/fold.cert.msh" >/dev/null || fail "fold: boundary nodes moved"
+"$hom" optimize "$work/fold.msh" -o "$work/fold.r0.msh" --threads 1 --certify --certify-rounds 0 --json "$work/fold.r0.json" >/dev/null 2>&1; rc=$?
+[[ $rc -eq 3 ]] || fail "fold: --certify-rounds 0 exit $rc, expected 3"
+[[ $(json_field "$work/fold.r0.json" optimized certified_invalid) -gt 0 ]] || fail "fold: rounds 0: json: certified_invalid"
+"$hom" optimize "$work/fold.msh" -o "$work/x.msh" --certify --certify-depth 99 >/dev/null 2>&1; [[ $? -eq 2 ]] || fail "bad --certify-depth"
+[[ ! -e "$work/x.msh" ]] || fail "bad --certify-depth: output written"
+
 # Bad input: a truncated file -> exit 1, FILE:LINE message, no output file.
 head -n 20 "$work/tri3.msh" > "$work/truncated.msh"
 err=$("$hom" optimize "$work/truncated.msh" -o "$work/x.msh" --json "$work/x.json" 2>&1 >/dev/null); rc=$?

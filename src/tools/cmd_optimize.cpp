@@ -3,6 +3,7 @@
 //                                [--ideal straight|equilateral]
 //                                [--measure shape|oddy] [--quadrature default|thesis]
 //                                [--threads N] [--max-iterations N]
+//                                [--certify [--certify-depth N] [--certify-rounds N]]
 //                                [--json FILE] [--vtu FILE] [-v|--verbose]
 //
 // Smooths and untangles a curved high-order mesh whose boundary is already
@@ -19,8 +20,16 @@
 // information), are fixed. Sliding boundary nodes on their geometry is
 // chapter 5's business.
 //
-// Exit status: 0 the optimized mesh is valid at every quadrature point,
-// 3 some elements are still inverted (the outputs are written anyway),
+// --certify makes certification (quality/certify.hpp: the sign of det D phi_P
+// everywhere in each element) the final acceptance test: elements valid at the
+// quadrature points but folded between them are optimized further with the
+// failing points added to their quadrature (optimize/certified.hpp), and the
+// certificate of the result is printed and added to the JSON with hom quality
+// --certify's keys.
+//
+// Exit status: 0 the optimized mesh is valid at every quadrature point (with
+// --certify: every element certified valid), 3 otherwise (the outputs are
+// written anyway),
 // 1 unreadable input or I/O error, 2 bad options or a surface mesh.
 
 #include <sys/resource.h>
@@ -37,6 +46,7 @@
 #include "hom/measure/oddy_measure.hpp"
 #include "hom/measure/shape_measure.hpp"
 #include "hom/optimize/optimize.hpp"
+#include "hom/quality/certify.hpp"
 #include "hom/quality/mesh_quality.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
@@ -63,6 +73,9 @@ struct OptimizeCli {
   bool verbose = false;
   int threads = 0;
   int max_iterations = 200;
+  bool certify = false;
+  int certify_depth = hom::CertifyOptions{}.max_depth;
+  int certify_rounds = hom::CertifyRepairOptions{}.max_rounds;
 };
 
 double peak_rss_mb() {
@@ -116,6 +129,9 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
   opt.threads = o.threads;
   opt.max_iterations = o.max_iterations;
   opt.verbose = o.verbose;
+  opt.certify = o.certify;
+  opt.certify_depth = o.certify_depth;
+  opt.certify_rounds = o.certify_rounds;
 
   std::printf("%s: %s of degree %d, %d elements, %d nodes (%d free, %ld free coordinates)\n", o.in.c_str(),
               std::string(F::name).c_str(), mesh.degree(), mesh.num_elements(), mesh.num_nodes(), free_nodes, free_dofs);
@@ -172,6 +188,47 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
   std::printf("%s\n", final_q.inverted() ? "INVALID: some elements still have det <= 0 at a quadrature point"
                                          : "valid at every quadrature point");
 
+  // The certify stage's outcome (or, with no free nodes, the certificate alone).
+  std::optional<hom::CertificationOutcome> certification;
+  if (o.certify) {
+    if (result) {
+      certification = result->certification;
+    } else {
+      hom::CertifyOptions co;
+      co.max_depth = o.certify_depth;
+      co.threads = o.threads;
+      const auto c = hom::certify_mesh(mesh, co);
+      certification.emplace();
+      certification->initial_valid = certification->valid = c.valid;
+      certification->initial_invalid = certification->invalid = c.invalid;
+      certification->initial_undecided = certification->undecided = c.undecided;
+      certification->min_scaled_jacobian = c.min_scaled_jacobian;
+      certification->reason = c.invalid + c.undecided > 0 ? hom::RepairStop::no_free_nodes : hom::RepairStop::certified;
+      for (int e = 0; e < mesh.num_elements(); ++e)
+        if (c.elements[e].status != hom::Certificate::certified_valid) certification->uncertified.push_back(e);
+    }
+  }
+  if (certification) {
+    const auto& c = *certification;
+    std::printf("certified (Bernstein bounds of det D phi_P, subdivision depth <= %d):\n", o.certify_depth);
+    std::printf("  after optimization: %d certified valid, %d certified invalid, %d undecided\n", c.initial_valid,
+                c.initial_invalid, c.initial_undecided);
+    if (c.rounds > 0) {
+      int iterations = 0;
+      for (const auto& r : c.repairs) iterations += r.iterations;
+      std::printf("  repair: %d round%s (%d iterations, %d sentinel points), stopped on %s, %.3f s%s\n", c.rounds,
+                  c.rounds == 1 ? "" : "s", iterations, c.sentinel_points, std::string(hom::to_string(c.reason)).c_str(),
+                  c.time_s, c.restored ? "; no fewer uncertified elements, so the optimized mesh is kept" : "");
+    }
+    std::printf("  final: %d certified valid, %d certified invalid, %d undecided; certified min scaled Jacobian >= %.4f\n",
+                c.valid, c.invalid, c.undecided, c.min_scaled_jacobian);
+    if (!c.certified()) {
+      std::printf("  NOT CERTIFIED: elements");
+      for (std::size_t k = 0; k < c.uncertified.size() && k < 10; ++k) std::printf(" %d", c.uncertified[k]);
+      std::printf("%s (%s)\n", c.uncertified.size() > 10 ? " ..." : "", std::string(hom::to_string(c.reason)).c_str());
+    }
+  }
+
   // Outputs only once the optimization is done, each written atomically.
   hom::io::write_msh(o.out, mesh, same_format_as(data));
   std::printf("wrote %s\n", o.out.c_str());
@@ -216,10 +273,25 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
         .set("converged", result ? result->result.converged : true)
         .set("time_s", result ? result->time_s : 0.0)
         .set("peak_rss_mb", peak_rss_mb());
+    if (certification) {
+      const auto& c = *certification;
+      optimized.set("certified_valid", c.valid)
+          .set("certified_invalid", c.invalid)
+          .set("undecided", c.undecided)
+          .set("certified_min_scaled_jacobian", c.min_scaled_jacobian)
+          .set("certify_max_depth", o.certify_depth)
+          .set("certify_rounds", c.rounds)
+          .set("certify_stop_reason", std::string(hom::to_string(c.reason)))
+          .set("certify_restored", c.restored)
+          .set("certify_time_s", c.time_s)
+          .set("initial_certified_valid", c.initial_valid)
+          .set("initial_certified_invalid", c.initial_invalid)
+          .set("initial_undecided", c.initial_undecided);
+    }
     hom::io::write_report(o.json, "hom optimize", HOM_VERSION, {make_case("initial", initial), std::move(optimized)});
     std::printf("wrote %s\n", o.json.c_str());
   }
-  return final_q.inverted() ? 3 : 0;
+  return final_q.inverted() || (certification && !certification->certified()) ? 3 : 0;
 }
 
 template <class Measure, class MeshT>
@@ -254,6 +326,9 @@ void check_options(OptimizeCli& o) {
     throw UsageError("optimize: --scope must be invalid or whole-mesh, got '" + o.scope + "'");
   if (o.threads < 0) throw UsageError("optimize: --threads must be >= 0 (0: OpenMP's default)");
   if (o.max_iterations < 1) throw UsageError("optimize: --max-iterations must be >= 1");
+  if (o.certify_depth < 0 || o.certify_depth > 20)
+    throw UsageError("optimize: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
+  if (o.certify_rounds < 0) throw UsageError("optimize: --certify-rounds must be >= 0");
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu")) throw UsageError("optimize: --vtu file name must end in .vtu");
   if (o.vtu == o.out || (!o.json.empty() && (o.json == o.out || o.json == o.vtu)))
     throw UsageError("optimize: -o, --vtu and --json must name different files");
@@ -269,8 +344,8 @@ int run(int argc, char** argv) {
       "point, curve or surface, and any node on the mesh's boundary (files without boundary\n"
       "elements or entities), are fixed; the other nodes move. Surface meshes (2D elements in\n"
       "3D) are not supported yet. OUT.msh is written in IN's MSH version and encoding.\n"
-      "Exit status: 0 the result is valid, 3 some elements are still inverted (outputs are\n"
-      "written anyway), 1 unreadable input, 2 bad options.\n\noptions");
+      "Exit status: 0 the result is valid, 3 some elements are still inverted (with --certify:\n"
+      "or not certified valid; outputs are written anyway), 1 unreadable input, 2 bad options.\n\noptions");
   opts.add_options()("help,h", "show this help")                                               //
       ("output,o", po::value(&o.out), "optimized mesh (.msh)")                                 //
       ("solver", po::value(&o.solver)->default_value("auto"),
@@ -289,6 +364,13 @@ int run(int argc, char** argv) {
        "quadrature: default | thesis (exact to degree 6p-3)")                                       //
       ("threads", po::value(&o.threads)->default_value(0), "threads (0: OpenMP's default)")       //
       ("max-iterations", po::value(&o.max_iterations)->default_value(200), "iteration limit per stage")  //
+      ("certify", po::bool_switch(&o.certify),
+       "certification as the final acceptance test: certify the sign of det everywhere in each element "
+       "(Bernstein bounds) and keep optimizing elements that fold between quadrature points")  //
+      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
+       "subdivision levels before an element is undecided (0..20)")  //
+      ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
+       "repair rounds at most (0: certify only)")                                              //
       ("json", po::value(&o.json), "write the statistics before and after as JSON")               //
       ("vtu", po::value(&o.vtu), "write the optimized mesh colored by quality (ParaView)")        //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per iteration (stderr)");
