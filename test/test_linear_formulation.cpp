@@ -13,18 +13,13 @@
 #include "hom/mesh/elevate.hpp"
 #include "hom/mesh/structured.hpp"
 #include "hom/optimize/linear_formulation.hpp"
+#include "test_meshes.hpp"
 
 using namespace hom;
 
 namespace {
 
-// Unit box with n cells per axis, elevated to degree p.
-template <class F>
-Mesh<F> box_mesh(int n, int p) {
-  std::array<int, F::dim> cells;
-  cells.fill(n);
-  return elevate(structured_mesh<F>(cells), p);
-}
+using testing::box_mesh;
 
 // A random matrix near the identity (det > 0) and a random translation.
 template <int D>

@@ -21,21 +21,15 @@
 #include "hom/optimize/mesh_problem.hpp"
 #include "hom/optimize/newton.hpp"
 #include "hom/optimize/optimize.hpp"
+#include "test_meshes.hpp"
 
 using namespace hom;
 
 namespace {
 
-template <class F>
-using TestMesh = Mesh<F, WarpBlend>;
-
-// Unit box with n cells per axis, elevated to degree p.
-template <class F>
-TestMesh<F> box_mesh(int n, int p) {
-  std::array<int, F::dim> cells;
-  cells.fill(n);
-  return elevate(structured_mesh<F, WarpBlend>(cells), p);
-}
+using testing::box_mesh;
+using testing::mesh_state;
+using testing::TestMesh;
 
 // Moves every free node by a uniform random vector of the given amplitude per coordinate.
 template <class MeshT>
@@ -45,12 +39,6 @@ void perturb(MeshT& mesh, double amplitude, unsigned seed) {
   for (int i = 0; i < mesh.num_nodes(); ++i)
     if (mesh.node_class(i).kind == NodeKind::free)
       for (int a = 0; a < MeshT::space_dim; ++a) mesh.nodes()(a, i) += u(rng);
-}
-
-template <class MeshT>
-MeshState mesh_state(const MeshT& mesh) {
-  const auto problem = make_problem(mesh, make_ideal_mesh(mesh, IdealKind::straight_sided));
-  return problem.status(problem.coordinates());
 }
 
 // Annulus r0 < r < r1 of triangles (nt sectors, nr layers), elevated to p,

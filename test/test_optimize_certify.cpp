@@ -24,20 +24,15 @@
 #include "hom/optimize/certified.hpp"
 #include "hom/optimize/optimize.hpp"
 #include "hom/quality/certify.hpp"
+#include "test_meshes.hpp"
 
 using namespace hom;
 
 namespace {
 
-template <class F>
-using TestMesh = Mesh<F, WarpBlend>;
-
-template <class F>
-TestMesh<F> box_mesh(int n, int p) {
-  std::array<int, F::dim> cells;
-  cells.fill(n);
-  return elevate(structured_mesh<F, WarpBlend>(cells), p);
-}
+using testing::box_mesh;
+using testing::mesh_state;
+using testing::TestMesh;
 
 /// A curved boundary that folds an element at a corner: the fixed high-order
 /// node of the face y = 0 nearest to (1/n + 1/(2 n p), 0[, 1/(2n)]) moves by
@@ -65,12 +60,6 @@ std::pair<TestMesh<F>, IdealMesh<F>> folded_mesh(int n, int p, double shift, dou
   mesh.nodes()(0, best) -= shift / n;
   mesh.nodes()(1, best) += height / n;
   return {std::move(mesh), ideal};
-}
-
-template <class MeshT>
-MeshState mesh_state(const MeshT& mesh, const IdealMesh<typename MeshT::family>& ideal) {
-  const auto problem = make_problem(mesh, ideal);
-  return problem.status(problem.coordinates());
 }
 
 /// The result's certification against certify_mesh on the result mesh.

@@ -95,9 +95,9 @@ struct GaussSeidel {
           double sum = 0.0;
           for (int q = 0; q < tab.num_points(); ++q) {
             const Vec b = tab.shape_gradients.row(inc.local).template segment<D>(q * D).transpose();
-            const Mat J = (JP.template middleCols<D>(q * D) + dx * b.transpose()) * id.inverse_jacobian[q];
+            const Mat J = (JP.template middleCols<D>(q * D) + dx * b.transpose()) * id.inverse_jacobian(q);
             const double eta = problem.measure().value(J, reg);
-            sum += 0.5 * id.weight[q] * (eta - 1.0) * (eta - 1.0);
+            sum += 0.5 * id.weight(q) * (eta - 1.0) * (eta - 1.0);
           }
           return sum;
         });
@@ -123,8 +123,8 @@ struct GaussSeidel {
         const auto& JP = jacobians[inc.element];
         problem.with_regularization(inc.element, [&](const auto& reg) {
           for (int q = 0; q < tab.num_points(); ++q) {
-            const Mat& A = id.inverse_jacobian[q];
-            const double c = id.weight[q];
+            const Mat& A = id.inverse_jacobian(q);
+            const double c = id.weight(q);
             const Vec b = tab.shape_gradients.row(inc.local).template segment<D>(q * D).transpose();
             const Vec w = A.transpose() * b;
             const Mat J = JP.template middleCols<D>(q * D) * A;

@@ -151,7 +151,7 @@ class OptimizationProblem {
       throw std::invalid_argument("hom::OptimizationProblem: " + std::to_string(ideals_.size()) + " ideals for " +
                                   std::to_string(elements_.cols()) + " elements");
     for (const auto& id : ideals_)
-      if (int(id.weight.size()) != tab.num_points())
+      if (id.num_points() != tab.num_points())
         throw std::invalid_argument("hom::OptimizationProblem: an ideal was tabulated with another quadrature rule");
     for (Eigen::Index e = 0; e < elements_.cols(); ++e)
       for (Eigen::Index i = 0; i < n; ++i)
@@ -277,8 +277,8 @@ class OptimizationProblem {
             valid = false;
             break;
           }
-          integral += id.weight[q] * eta * eta;
-          volume += id.weight[q];
+          integral += id.weight(q) * eta * eta;
+          volume += id.weight(q);
         }
         s.valid[e] = valid;
         s.quality[e] = valid ? 1.0 / std::sqrt(integral / volume) : 0.0;  // eqs 3.20, 3.24
@@ -303,7 +303,7 @@ class OptimizationProblem {
           double f = 0.0;
           for (int q = 0; q < num_points(); ++q) {
             const double eta = measure_.value(point_jacobian(JP, b, q, id), reg);
-            f += 0.5 * id.weight[q] * (eta - 1.0) * (eta - 1.0);
+            f += 0.5 * id.weight(q) * (eta - 1.0) * (eta - 1.0);
           }
           return f;
         });
@@ -325,12 +325,12 @@ class OptimizationProblem {
         fe[e] = with_regularization(e, [&](const auto& reg) {
           double f = 0.0;
           for (int q = 0; q < num_points(); ++q) {
-            const NodeMatrix& A = id.inverse_jacobian[q];
+            const NodeMatrix& A = id.inverse_jacobian(q);
             NodeMatrix gq;
             const double eta = measure_.value_gradient(point_jacobian(JP, b, q, id), reg, gq);
             const double r = eta - 1.0;
-            f += 0.5 * id.weight[q] * r * r;
-            w.P.template block<dim, dim>(dim * b, dim * q).noalias() = (id.weight[q] * r) * gq * A.transpose();
+            f += 0.5 * id.weight(q) * r * r;
+            w.P.template block<dim, dim>(dim * b, dim * q).noalias() = (id.weight(q) * r) * gq * A.transpose();
           }
           return f;
         });
@@ -364,17 +364,16 @@ class OptimizationProblem {
     HOM_PARALLEL_FOR(detail::useful_threads(threads_, ne, 64))
     for (int e = 0; e < ne; ++e) {
       const Ideal& id = ideals_[e];
-      const double volume = std::accumulate(id.weight.begin(), id.weight.end(), 0.0);
-      const bool affine = std::all_of(id.inverse_jacobian.begin(), id.inverse_jacobian.end(),
-                                      [&](const NodeMatrix& A) { return A == id.inverse_jacobian[0]; });
-      const NodeMatrix S = id.inverse_jacobian[0] * id.inverse_jacobian[0].transpose();
+      const double volume = std::accumulate(id.weights.begin(), id.weights.end(), 0.0);
+      const bool affine = id.affine();
+      const NodeMatrix S = id.inverse_jacobian(0) * id.inverse_jacobian(0).transpose();
       for (int l = 0; l < n; ++l) {
         double squares = 0.0;
         if (affine) {
-          squares = id.weight[0] / tab.rule.weights[0] * K.row(l).dot(S.reshaped().transpose());
+          squares = id.weight(0) / tab.rule.weights[0] * K.row(l).dot(S.reshaped().transpose());
         } else {
           for (int q = 0; q < nq; ++q)
-            squares += id.weight[q] * (id.inverse_jacobian[q].transpose() * reference_gradient(l, q)).squaredNorm();
+            squares += id.weight(q) * (id.inverse_jacobian(q).transpose() * reference_gradient(l, q)).squaredNorm();
         }
         Se[Eigen::Index(e) * n + l] = std::sqrt(volume * squares);
       }
@@ -539,8 +538,8 @@ class OptimizationProblem {
         fe[e] = with_regularization(e, [&](const auto& reg) {
           double f = 0.0;
           for (int q = 0; q < nq; ++q, data += stride) {
-            const NodeMatrix& A = id.inverse_jacobian[q];
-            const double c = id.weight[q];
+            const NodeMatrix& A = id.inverse_jacobian(q);
+            const double c = id.weight(q);
             const NodeMatrix J = point_jacobian(JP, b, q, id);
             const auto pd = point_second_order(J, A, c, reg, form, data);
             f += 0.5 * c * pd.residual * pd.residual;
@@ -648,7 +647,7 @@ class OptimizationProblem {
   }
 
   static NodeMatrix point_jacobian(const Eigen::MatrixXd& JP, int b, int q, const Ideal& id) {
-    return JP.template block<dim, dim>(dim * b, dim * q) * id.inverse_jacobian[q];
+    return JP.template block<dim, dim>(dim * b, dim * q) * id.inverse_jacobian(q);
   }
 
   /// Calls fn(first, count, JP, workspace) for every block, JP = Xb * G with
