@@ -178,6 +178,7 @@ class Pipeline {
     mesh_ = curved;
     mesh_.reset_ideal();
     straight_ = mesh_.nodes();  // only the vertex columns are read (straight3)
+    snap_to_cad();
     collect_patches();
     optimize_placed(out, 0.0);
     out.time_s = since(start);
@@ -185,6 +186,31 @@ class Pipeline {
   }
 
  private:
+  /// Puts every node classified on a CAD vertex, edge or face with its
+  /// parameters at V, C(t) or S(u, v). A curved mesh read from a file is on
+  /// the CAD only up to the interpolation error of its stored nodes (MSH
+  /// keeps the element map at equispaced points, hom's nodes are
+  /// interpolated from them); the optimizers then keep the nodes on their
+  /// entities exactly.
+  void snap_to_cad() {
+    for (int i = 0; i < mesh_.num_nodes(); ++i) {
+      const NodeClass& c = mesh_.node_class(i);
+      if (!c.entity || (c.kind == NodeKind::free && c.entity->dim == SpaceDim)) continue;
+      if (planar && c.entity->dim == D) continue;  // the planar domain itself
+      const int tag = c.entity->tag;
+      Eigen::Vector3d x;
+      if (c.entity->dim == 0 && tag >= 1 && tag <= cad_.num_vertices())
+        x = cad_.vertex(tag);
+      else if (c.entity->dim == 1 && c.num_params == 1 && curves_.count(tag))
+        x = curves_.at(tag).evaluate(c.params[0]);
+      else if (c.entity->dim == 2 && c.num_params == 2 && surfaces_.count(tag))
+        x = surfaces_.at(tag).evaluate({c.params[0], c.params[1]});
+      else
+        continue;
+      mesh_.nodes().col(i) = x.template head<SpaceDim>();
+    }
+  }
+
   /// Chapter 5 on the CAD faces, chapter 4 in the domain, the result's
   /// per-element quality and its CAD conformity.
   void optimize_placed(CurveResult<MeshT>& out, double t_boundary) {

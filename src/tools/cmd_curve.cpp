@@ -27,8 +27,6 @@
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
 // options.
 
-#include <sys/resource.h>
-
 #include <chrono>
 #include <cstdio>
 #include <optional>
@@ -37,12 +35,12 @@
 
 #include <boost/program_options.hpp>
 
+#include "cad_command.hpp"
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
 #include "command.hpp"
 #include "curve_mesh.hpp"
 #include "curve_models.hpp"
-#include "hom/io/report.hpp"
 #include "hom/optimize/solve.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
@@ -67,137 +65,6 @@ struct CurveCli {
   int iterations_after_valid = -1;
   bool verbose = false;
 };
-
-double peak_rss_mb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;
-}
-
-void print_table(const std::vector<hom::cad::StageReport>& stages) {
-  std::printf("\n  %-8s %-10s %8s %8s %7s %7s %7s %8s %5s %8s %8s\n", "part", "stage", "elements", "nodes", "Min", "Max",
-              "Mean", "Std.Dev.", "#inv", "min SJ", "time s");
-  for (const auto& s : stages)
-    std::printf("  %-8s %-10s %8d %8d %7.4f %7.4f %7.4f %8.4f %5d %8.4f %8.2f\n", s.part.c_str(), s.stage.c_str(),
-                s.elements, s.nodes, s.quality.min, s.quality.max, s.quality.mean, s.quality.std_dev, s.quality.inverted,
-                s.scaled_jacobian.min, s.time_s);
-  std::printf("\n");
-}
-
-/// Curves `input` (a linear mesh of the model; or, when it is already curved,
-/// only optimizes it on the model: hom::cad::optimize_on_cad), checks the
-/// result and writes it.
-template <class MeshT>
-int curve_and_write(const hom::cad::CadModel& cad, const MeshT& input, const CurveCli& o, double t_linear) {
-  using F = typename MeshT::family;
-  constexpr int S = MeshT::space_dim;
-  hom::cad::CurveOptions co;
-  co.p = o.p;
-  co.measure = o.measure;
-  co.solver = o.solver;
-  co.pcont = o.pcont == "on"    ? hom::cad::CurveOptions::Continuation::on
-             : o.pcont == "off" ? hom::cad::CurveOptions::Continuation::off
-                                : hom::cad::CurveOptions::Continuation::automatic;
-  co.threads = o.threads;
-  co.iterations_after_valid = o.iterations_after_valid;
-  co.verbose = o.verbose;
-  co.progress = [](const std::string& line) {
-    std::printf("  %s\n", line.c_str());
-    std::fflush(stdout);
-  };
-  const std::string kind = MeshT::dim == 3 ? "volume" : S == 2 ? "planar" : "surface";
-  const bool curved = input.degree() > 1;
-  std::printf("%s %s mesh: %d %s elements of degree %d, %d nodes (%.2f s)\n", curved ? "curved" : "linear",
-              kind.c_str(), input.num_elements(), std::string(F::name).c_str(), input.degree(), input.num_nodes(),
-              t_linear);
-  if (curved) co.p = input.degree();
-  auto r = curved ? hom::cad::optimize_on_cad<F, S>(cad, input, co) : hom::cad::curve_mesh<F, S>(cad, input, co);
-  if (!r.stages.empty()) r.stages.front().time_s += t_linear;
-  // det D phi is also sampled at the nodes (the scaled Jacobian): a
-  // negative value there is a fold that no quadrature point sees (typically
-  // an element corner on a curved boundary opened beyond 180 degrees); a
-  // zero one a corner of 180 degrees (two CAD edges meeting tangentially) or,
-  // on a surface, a pole where the surface normal vanishes (allowed there).
-  int folded_at_nodes = 0;
-  for (double sj : r.element_scaled_jacobian) folded_at_nodes += S == MeshT::dim ? !(sj > 0.0) : !(sj >= 0.0);
-  print_table(r.stages);
-  const double rss = peak_rss_mb();
-  std::printf("boundary on the CAD: %d nodes checked, largest distance %.3g\n", r.conformity.checked,
-              r.conformity.max_distance);
-  const bool valid = r.valid && folded_at_nodes == 0;
-  if (!valid) {
-    if (r.inverted > 0)
-      std::fprintf(stderr, "hom: curve: INVALID result: %d of %d elements inverted after optimization; nothing written\n",
-                   r.inverted, r.mesh.num_elements());
-    else if (!r.conformity.ok)
-      std::fprintf(stderr, "hom: curve: INVALID result: %s; nothing written\n", r.conformity.problem.c_str());
-    else
-      std::fprintf(stderr,
-                   "hom: curve: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
-                   "valid: a fold at an element corner); nothing written\n",
-                   folded_at_nodes);
-  } else {
-    std::printf("valid: every element valid at every quadrature point and node, every boundary node on its CAD entity\n");
-  }
-
-  auto json_cases = [&]() {
-    std::vector<hom::io::Json> cases;
-    for (const auto& s : r.stages) {
-      // The surface part of a volume mesh is its boundary triangles.
-      const std::string family = s.part == "surface" ? std::string(MeshT::dim == 3 ? "triangle" : F::name)
-                                                     : std::string(F::name);
-      hom::io::CaseHeader h{cad.name(), family, co.p, s.elements, s.nodes, s.stage, o.measure, "straight-sided"};
-      auto c = hom::io::quality_case(h, s.quality, s.scaled_jacobian);
-      c.set("part", s.part)
-          .set("time_s", s.time_s)
-          .set("iterations", s.iterations)
-          .set("peak_rss_mb", rss)
-          .set("threads", o.threads);
-      if (!s.solver.empty()) c.set("solver", s.solver).set("stop_reason", s.stop_reason);
-      if (s.part == "surface" && s.stage == "optimized") c.set("faces_not_converged", s.faces_not_converged);
-      if (s.stage == "optimized" && s.part != "surface") c.set("p_continuation", s.p_continuation);
-      cases.push_back(std::move(c));
-    }
-    if (!cases.empty())
-      cases.back()
-          .set("valid", valid)
-          .set("elements_folded_at_nodes", folded_at_nodes)
-          .set("max_cad_distance", r.conformity.max_distance)
-          .set("output", valid ? hom::io::Json(o.out) : hom::io::Json());
-    return cases;
-  };
-  if (!valid) {
-    // The report still says what happened (it is not the mesh).
-    if (!o.json.empty()) hom::io::write_report(o.json, "hom curve", HOM_VERSION, json_cases());
-    return 3;
-  }
-
-  auto mesh = std::move(r.mesh);
-  hom::cad::add_physical_groups(mesh);
-  auto data = hom::io::to_msh_data(mesh);
-  const double gap = hom::cad::add_cad_parameters(data, cad);
-  hom::io::write_msh_data(o.out, data, {});
-  std::printf("wrote %s (MSH 4.1, entities, physical groups and parametric coordinates; Gmsh's equispaced nodes of the "
-              "curved elements lie within %.2g of the CAD)\n",
-              o.out.c_str(), gap);
-  if (!o.vtu.empty()) {
-    std::vector<double> inverted;
-    for (bool v : r.element_valid) inverted.push_back(v ? 0.0 : 1.0);
-    hom::io::VtuOptions vo;
-    vo.interpolate_point_data = false;
-    hom::io::write_vtu(o.vtu, mesh, {hom::tools::node_kind_field(mesh)},
-                       {{"quality", 1, r.element_quality},
-                        {"scaled_jacobian", 1, r.element_scaled_jacobian},
-                        {"inverted", 1, inverted}},
-                       vo);
-    std::printf("wrote %s\n", o.vtu.c_str());
-  }
-  if (!o.json.empty()) {
-    hom::io::write_report(o.json, "hom curve", HOM_VERSION, json_cases());
-    std::printf("wrote %s\n", o.json.c_str());
-  }
-  return 0;
-}
 
 void check_options(const CurveCli& o) {
   using hom::tools::UsageError;
@@ -229,25 +96,23 @@ void check_options(const CurveCli& o) {
     throw UsageError("curve: --size and --size-curvature apply to the built-in mesher, not to --mesh");
 }
 
-/// A user's planar mesh (2D elements in z = 0): classified as a surface mesh
-/// in 3D, the classification copied back.
-template <class MeshT>
-void classify_user_mesh(MeshT& mesh, const hom::cad::CadModel& cad, double tolerance) {
-  if constexpr (MeshT::space_dim == 3) {
-    hom::cad::classify(mesh, cad, tolerance);
-  } else {
-    using F = typename MeshT::family;
-    typename hom::Mesh<F, hom::WarpBlend, 3>::Coordinates X = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
-    X.topRows(2) = mesh.nodes();
-    hom::Mesh<F, hom::WarpBlend, 3> lifted(mesh.degree(), X, mesh.elements());
-    hom::cad::classify(lifted, cad, tolerance);
-    mesh.node_classes() = lifted.node_classes();
-    mesh.element_entities() = lifted.element_entities();
-    mesh.entities() = lifted.entities();
-    // Nodes inside the planar face move freely.
-    for (auto& c : mesh.node_classes())
-      if (c.entity && c.entity->dim == 2) c.kind = hom::NodeKind::free;
-  }
+/// The shared pipeline's settings from the command line.
+hom::tools::CadCommandOptions cad_command_options(const CurveCli& o) {
+  hom::tools::CadCommandOptions c;
+  c.command = "curve";
+  c.out = o.out;
+  c.vtu = o.vtu;
+  c.json = o.json;
+  c.curve.p = o.p;
+  c.curve.measure = o.measure;
+  c.curve.solver = o.solver;
+  c.curve.pcont = o.pcont == "on"    ? hom::cad::CurveOptions::Continuation::on
+                  : o.pcont == "off" ? hom::cad::CurveOptions::Continuation::off
+                                     : hom::cad::CurveOptions::Continuation::automatic;
+  c.curve.threads = o.threads;
+  c.curve.iterations_after_valid = o.iterations_after_valid;
+  c.curve.verbose = o.verbose;
+  return c;
 }
 
 int run(int argc, char** argv) {
@@ -310,6 +175,7 @@ int run(int argc, char** argv) {
       mo.vertex_sizes[v] = (cad.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
   }
 
+  const hom::tools::CadCommandOptions co = cad_command_options(o);
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   if (!o.mesh.empty()) {
@@ -325,26 +191,28 @@ int run(int argc, char** argv) {
           throw hom::tools::UsageError("curve: " + o.mesh + " is already curved (degree " +
                                        std::to_string(mesh.degree()) + "); --p " + std::to_string(o.p) +
                                        " cannot change it (leave --p out to optimize it on the model)");
-        classify_user_mesh(mesh, cad, o.tolerance * cad.size());
-        return curve_and_write(cad, mesh, o, elapsed());
+        hom::tools::classify_user_mesh(mesh, cad, o.tolerance * cad.size());
+        return hom::tools::curve_and_write(cad, mesh, co, elapsed());
       }
     });
   }
   if (cad.num_solids() > 0 && !o.surface) {
     if (o.quads) throw hom::tools::UsageError("curve: volume meshes are tetrahedral; --quads needs --surface");
     const auto linear = hom::cad::mesh_cad<hom::Simplex<3>>(cad, mo);
-    return curve_and_write(cad, linear, o, elapsed());
+    return hom::tools::curve_and_write(cad, linear, co, elapsed());
   }
   if (auto placed = hom::cad::place_in_xy_plane(cad)) {
     if (placed->moved) std::printf("planar model: moved rigidly into the plane z = 0\n");
+    const auto& model = placed->model;
     if (o.quads)
-      return curve_and_write(placed->model, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 2>(placed->model, mo), o,
-                             elapsed());
-    return curve_and_write(placed->model, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 2>(placed->model, mo), o,
-                           elapsed());
+      return hom::tools::curve_and_write(model, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 2>(model, mo), co,
+                                         elapsed());
+    return hom::tools::curve_and_write(model, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 2>(model, mo), co,
+                                       elapsed());
   }
-  if (o.quads) return curve_and_write(cad, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 3>(cad, mo), o, elapsed());
-  return curve_and_write(cad, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 3>(cad, mo), o, elapsed());
+  if (o.quads)
+    return hom::tools::curve_and_write(cad, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 3>(cad, mo), co, elapsed());
+  return hom::tools::curve_and_write(cad, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 3>(cad, mo), co, elapsed());
 }
 
 const hom::tools::RegisterCommand reg{{"curve", "Generate a curved high-order mesh from CAD (chapter 6)", run}};

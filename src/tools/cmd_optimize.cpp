@@ -5,6 +5,9 @@
 //                                [--threads N] [--max-iterations N]
 //                                [--certify [--certify-depth N] [--certify-rounds N]]
 //                                [--json FILE] [--vtu FILE] [-v|--verbose]
+// hom optimize IN.msh --cad MODEL.step|.iges|.brep -o OUT.msh [--solver S] [--pcont]
+//                                [--measure shape|oddy] [--threads N] [--max-iterations N]
+//                                [--tolerance T] [--json FILE] [--vtu FILE] [-v]
 //
 // Smooths and untangles a curved high-order mesh whose boundary is already
 // curved (chapter 4): the interior nodes move to minimize the regularized
@@ -29,7 +32,7 @@
 //
 // Exit status: 0 the optimized mesh is valid at every quadrature point (with
 // --certify: every element certified valid), 3 otherwise (the outputs are
-// written anyway),
+// written anyway; with --cad nothing but the JSON report is written),
 // 1 unreadable input or I/O error, 2 bad options or a surface mesh.
 
 #include <sys/resource.h>
@@ -50,6 +53,11 @@
 #include "hom/quality/mesh_quality.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
+#ifdef HOM_HAVE_CURVE
+#include <chrono>
+
+#include "cad_command.hpp"
+#endif
 
 namespace po = boost::program_options;
 
@@ -62,6 +70,8 @@ constexpr long auto_newton_max_dofs = 20000;
 
 struct OptimizeCli {
   std::string in, out;
+  std::string cad;           ///< --cad MODEL: optimize on the model's geometry
+  double tolerance = 1e-6;   ///< --cad: classification tolerance relative to the model's size
   std::string solver = "auto";
   std::string ideal = "straight";
   std::string measure = "shape";
@@ -300,6 +310,44 @@ int with_quadrature(MeshT& mesh, const Measure& measure, const OptimizeCli& o, c
   return optimize_mesh<Measure, hom::DefaultExactness>(mesh, measure, o, data);
 }
 
+#ifdef HOM_HAVE_CURVE
+/// hom optimize IN.msh --cad MODEL: the mesh classified on the model and
+/// optimized there (cad_command.hpp, as `hom curve MODEL --mesh CURVED.msh`).
+int optimize_on_cad(const OptimizeCli& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const hom::cad::CadModel cad = hom::cad::read_cad(o.cad);  // CadError names the file
+  std::printf("%s\n", cad.summary().c_str());
+  for (const auto& h : cad.healing()) std::printf("  healed: %s\n", h.c_str());
+  hom::tools::CadCommandOptions c;
+  c.command = "optimize";
+  c.out = o.out;
+  c.vtu = o.vtu;
+  c.json = o.json;
+  c.curve.measure = o.measure;
+  c.curve.solver = o.solver;
+  c.curve.pcont = o.pcont ? hom::cad::CurveOptions::Continuation::on : hom::cad::CurveOptions::Continuation::automatic;
+  c.curve.threads = o.threads;
+  c.curve.max_iterations = o.max_iterations;
+  c.curve.surface_max_iterations = o.max_iterations;
+  c.curve.verbose = o.verbose;
+  const auto data = hom::io::read_msh_data(o.in);
+  return hom::tools::with_mesh<hom::WarpBlend>(data, [&](auto& mesh) -> int {
+    using F = typename std::decay_t<decltype(mesh)>::family;
+    if constexpr (!F::is_simplex && F::dim == 3) {
+      throw hom::tools::UsageError("optimize: " + o.in + " is a hexahedral mesh; --cad handles tetrahedra, and "
+                                   "triangles or quadrilaterals on surfaces or in the plane");
+    } else {
+      if (mesh.degree() < 2)
+        throw hom::tools::UsageError("optimize: " + o.in + " is a linear mesh; curve it onto the model with 'hom curve " +
+                                     o.cad + " --mesh " + o.in + " --p P'");
+      hom::tools::classify_user_mesh(mesh, cad, o.tolerance * cad.size());
+      const double t_read = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return hom::tools::curve_and_write(cad, mesh, c, t_read);
+    }
+  });
+}
+#endif
+
 void check_options(OptimizeCli& o) {
   using hom::tools::UsageError;
   if (o.in.empty()) throw UsageError("optimize: need an input mesh (see 'hom optimize --help')");
@@ -330,6 +378,19 @@ void check_options(OptimizeCli& o) {
     throw UsageError("optimize: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
   if (o.certify_rounds < 0) throw UsageError("optimize: --certify-rounds must be >= 0");
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu")) throw UsageError("optimize: --vtu file name must end in .vtu");
+  if (!o.cad.empty()) {
+    // On a CAD model every element is measured against its straight-sided
+    // counterpart with the default quadrature (hom::cad::optimize_on_cad).
+    auto refuse = [&](bool given, const char* what) {
+      if (given) throw UsageError(std::string("optimize: ") + what + " is not available with --cad");
+    };
+    refuse(o.ideal != "straight", "--ideal equilateral");
+    refuse(o.quadrature != "default", "--quadrature thesis");
+    refuse(o.scope != "invalid", "--scope whole-mesh");
+    refuse(o.vertex_continuation, "--vertex-continuation");
+    refuse(o.certify, "--certify");
+    if (!(o.tolerance > 0)) throw UsageError("optimize: --tolerance must be positive");
+  }
   if (o.vtu == o.out || (!o.json.empty() && (o.json == o.out || o.json == o.vtu)))
     throw UsageError("optimize: -o, --vtu and --json must name different files");
 }
@@ -342,8 +403,12 @@ int run(int argc, char** argv) {
       "chapter 4): the interior nodes move to minimize the regularized distortion of eq 4.10\n"
       "against the ideal mesh; the boundary stays as it is. Nodes the file puts on a geometric\n"
       "point, curve or surface, and any node on the mesh's boundary (files without boundary\n"
-      "elements or entities), are fixed; the other nodes move. Surface meshes (2D elements in\n"
-      "3D) are not supported yet. OUT.msh is written in IN's MSH version and encoding.\n"
+      "elements or entities), are fixed; the other nodes move. OUT.msh is written in IN's MSH\n"
+      "version and encoding.\n"
+      "With --cad MODEL the mesh is classified on the model and optimized on it (chapters 5-6):\n"
+      "nodes on CAD faces slide on their surfaces, nodes on CAD edges stay, interior nodes move.\n"
+      "This is how surface meshes (2D elements in 3D) are optimized; the result is written only\n"
+      "when it is valid and every boundary node lies on the CAD.\n"
       "Exit status: 0 the result is valid, 3 some elements are still inverted (with --certify:\n"
       "or not certified valid; outputs are written anyway), 1 unreadable input, 2 bad options.\n\noptions");
   opts.add_options()("help,h", "show this help")                                               //
@@ -371,20 +436,30 @@ int run(int argc, char** argv) {
        "subdivision levels before an element is undecided (0..20)")  //
       ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
        "repair rounds at most (0: certify only)")                                              //
+      ("cad", po::value(&o.cad), "CAD model (.step, .iges, .brep) the mesh lies on: optimize on it")  //
+      ("tolerance", po::value(&o.tolerance)->default_value(1e-6),
+       "--cad: classification tolerance, relative to the model's size")                       //
       ("json", po::value(&o.json), "write the statistics before and after as JSON")               //
       ("vtu", po::value(&o.vtu), "write the optimized mesh colored by quality (ParaView)")        //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per iteration (stderr)");
   po::variables_map vm;
   if (!hom::tools::parse_options("optimize", argc, argv, opts, {{"input", po::value(&o.in)}}, vm)) return 0;
   check_options(o);
+  if (!o.cad.empty()) {
+#ifdef HOM_HAVE_CURVE
+    return optimize_on_cad(o);
+#else
+    throw hom::tools::UsageError("optimize: --cad needs hom built with OpenCASCADE and Gmsh (src/cad, src/curve)");
+#endif
+  }
 
   const auto data = hom::io::read_msh_data(o.in);
   return hom::tools::with_mesh<hom::WarpBlend>(data, [&](auto& mesh) -> int {
     using M = std::decay_t<decltype(mesh)>;
     if constexpr (M::space_dim != M::dim) {
       throw hom::tools::UsageError("optimize: " + o.in +
-                                   " is a surface mesh (2D elements in 3D); optimizing surface meshes in parametric "
-                                   "coordinates (chapter 5) is not available yet");
+                                   " is a surface mesh (2D elements in 3D): its nodes slide on a surface, so give "
+                                   "the surface with --cad MODEL.step|.iges|.brep");
     } else {
       if (o.measure == "oddy") return with_quadrature(mesh, hom::OddyMeasure{}, o, data);
       return with_quadrature(mesh, hom::ShapeMeasure{}, o, data);

@@ -1,0 +1,190 @@
+#pragma once
+/// @file cad_command.hpp
+/// What `hom curve` and `hom optimize --cad` share: a user's mesh classified
+/// on a CAD model, chapter 6's pipeline (or its optimization tail alone on a
+/// curved mesh) run on it, the result checked, and the mesh, VTU and JSON
+/// report written only when it is valid.
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "cad_mesher.hpp"
+#include "cad_model.hpp"
+#include "curve_mesh.hpp"
+#include "hom/io/report.hpp"
+#include "mesh_io.hpp"
+
+namespace hom::tools {
+
+/// The command's settings the pipeline and the outputs need.
+struct CadCommandOptions {
+  std::string command;  ///< "curve" or "optimize": names the report and the messages
+  std::string out, vtu, json;
+  cad::CurveOptions curve;  ///< p, measure, solver, p-continuation, threads, iterations
+};
+
+inline double peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
+}
+
+inline void print_stage_table(const std::vector<cad::StageReport>& stages) {
+  std::printf("\n  %-8s %-10s %8s %8s %7s %7s %7s %8s %5s %8s %8s\n", "part", "stage", "elements", "nodes", "Min", "Max",
+              "Mean", "Std.Dev.", "#inv", "min SJ", "time s");
+  for (const auto& s : stages)
+    std::printf("  %-8s %-10s %8d %8d %7.4f %7.4f %7.4f %8.4f %5d %8.4f %8.2f\n", s.part.c_str(), s.stage.c_str(),
+                s.elements, s.nodes, s.quality.min, s.quality.max, s.quality.mean, s.quality.std_dev, s.quality.inverted,
+                s.scaled_jacobian.min, s.time_s);
+  std::printf("\n");
+}
+
+/// The classification tolerance of a curved mesh's nodes, relative to the
+/// model's size: a file keeps the curved elements at equispaced points, which
+/// lie on the CAD only up to the interpolation error (about 1e-4 of the model
+/// for a degree-3 sphere of 200 triangles), and hom's nodes are interpolated
+/// from them. A face node is much farther than this from any CAD edge, so the
+/// looser tolerance does not move it to one.
+constexpr double curved_relative_tolerance = 1e-3;
+
+/// Classifies a user's mesh on `cad` by projection (cad::classify) within
+/// `tolerance` (absolute; a curved mesh within at least
+/// curved_relative_tolerance x the model's size). A planar mesh (2D elements
+/// in z = 0) is classified as a surface mesh in 3D and the classification
+/// copied back; the nodes inside its planar face move freely.
+template <class MeshT>
+void classify_user_mesh(MeshT& mesh, const cad::CadModel& cad, double tolerance) {
+  if (mesh.degree() > 1) tolerance = std::max(tolerance, curved_relative_tolerance * cad.size());
+  if constexpr (MeshT::space_dim == 3) {
+    cad::classify(mesh, cad, tolerance);
+  } else {
+    using F = typename MeshT::family;
+    typename Mesh<F, WarpBlend, 3>::Coordinates X = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
+    X.topRows(2) = mesh.nodes();
+    Mesh<F, WarpBlend, 3> lifted(mesh.degree(), X, mesh.elements());
+    cad::classify(lifted, cad, tolerance);
+    mesh.node_classes() = lifted.node_classes();
+    mesh.element_entities() = lifted.element_entities();
+    mesh.entities() = lifted.entities();
+    for (auto& c : mesh.node_classes())
+      if (c.entity && c.entity->dim == 2) c.kind = NodeKind::free;
+  }
+}
+
+/// Curves `input` (a linear mesh of the model) or, when it is already curved,
+/// only optimizes it on the model (cad::optimize_on_cad), checks the result
+/// and writes it. The check: every element valid at every quadrature point,
+/// det D phi > 0 at every node (>= 0 on surfaces, whose normal vanishes at a
+/// pole) and every boundary node on its CAD entity. An invalid result writes
+/// no mesh (only the JSON report, which says what happened). Returns the exit
+/// status: 0 written, 3 invalid.
+template <class MeshT>
+int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadCommandOptions& o, double t_linear) {
+  using F = typename MeshT::family;
+  constexpr int S = MeshT::space_dim;
+  cad::CurveOptions co = o.curve;
+  co.progress = [](const std::string& line) {
+    std::printf("  %s\n", line.c_str());
+    std::fflush(stdout);
+  };
+  const std::string kind = MeshT::dim == 3 ? "volume" : S == 2 ? "planar" : "surface";
+  const bool curved = input.degree() > 1;
+  std::printf("%s %s mesh: %d %s elements of degree %d, %d nodes (%.2f s)\n", curved ? "curved" : "linear",
+              kind.c_str(), input.num_elements(), std::string(F::name).c_str(), input.degree(), input.num_nodes(),
+              t_linear);
+  if (curved) co.p = input.degree();
+  auto r = curved ? cad::optimize_on_cad<F, S>(cad, input, co) : cad::curve_mesh<F, S>(cad, input, co);
+  if (!r.stages.empty()) r.stages.front().time_s += t_linear;
+  // det D phi is also sampled at the nodes (the scaled Jacobian): a negative
+  // value there is a fold that no quadrature point sees (typically an element
+  // corner on a curved boundary opened beyond 180 degrees); a zero one a
+  // corner of 180 degrees or, on a surface, a pole (allowed there).
+  int folded_at_nodes = 0;
+  for (double sj : r.element_scaled_jacobian) folded_at_nodes += S == MeshT::dim ? !(sj > 0.0) : !(sj >= 0.0);
+  print_stage_table(r.stages);
+  const double rss = peak_rss_mb();
+  std::printf("boundary on the CAD: %d nodes checked, largest distance %.3g\n", r.conformity.checked,
+              r.conformity.max_distance);
+  const bool valid = r.valid && folded_at_nodes == 0;
+  const char* cmd = o.command.c_str();
+  if (!valid) {
+    if (r.inverted > 0)
+      std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; nothing written\n",
+                   cmd, r.inverted, r.mesh.num_elements());
+    else if (!r.conformity.ok)
+      std::fprintf(stderr, "hom: %s: INVALID result: %s; nothing written\n", cmd, r.conformity.problem.c_str());
+    else
+      std::fprintf(stderr,
+                   "hom: %s: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
+                   "valid: a fold at an element corner); nothing written\n",
+                   cmd, folded_at_nodes);
+  } else {
+    std::printf("valid: every element valid at every quadrature point and node, every boundary node on its CAD entity\n");
+  }
+
+  const std::string program = "hom " + o.command;
+  auto json_cases = [&]() {
+    std::vector<io::Json> cases;
+    for (const auto& s : r.stages) {
+      // The surface part of a volume mesh is its boundary triangles.
+      const std::string family =
+          s.part == "surface" ? std::string(MeshT::dim == 3 ? "triangle" : F::name) : std::string(F::name);
+      io::CaseHeader h{cad.name(), family, co.p, s.elements, s.nodes, s.stage, co.measure, "straight-sided"};
+      auto c = io::quality_case(h, s.quality, s.scaled_jacobian);
+      c.set("part", s.part)
+          .set("time_s", s.time_s)
+          .set("iterations", s.iterations)
+          .set("peak_rss_mb", rss)
+          .set("threads", co.threads);
+      if (!s.solver.empty()) c.set("solver", s.solver).set("stop_reason", s.stop_reason);
+      if (s.part == "surface" && s.stage == "optimized") c.set("faces_not_converged", s.faces_not_converged);
+      if (s.stage == "optimized" && s.part != "surface") c.set("p_continuation", s.p_continuation);
+      cases.push_back(std::move(c));
+    }
+    if (!cases.empty())
+      cases.back()
+          .set("valid", valid)
+          .set("elements_folded_at_nodes", folded_at_nodes)
+          .set("max_cad_distance", r.conformity.max_distance)
+          .set("output", valid ? io::Json(o.out) : io::Json());
+    return cases;
+  };
+  if (!valid) {
+    if (!o.json.empty()) io::write_report(o.json, program, HOM_VERSION, json_cases());
+    return 3;
+  }
+
+  auto mesh = std::move(r.mesh);
+  cad::add_physical_groups(mesh);
+  auto data = io::to_msh_data(mesh);
+  const double gap = cad::add_cad_parameters(data, cad);
+  io::write_msh_data(o.out, data, {});
+  std::printf("wrote %s (MSH 4.1, entities, physical groups and parametric coordinates; Gmsh's equispaced nodes of the "
+              "curved elements lie within %.2g of the CAD)\n",
+              o.out.c_str(), gap);
+  if (!o.vtu.empty()) {
+    std::vector<double> inverted;
+    for (bool v : r.element_valid) inverted.push_back(v ? 0.0 : 1.0);
+    io::VtuOptions vo;
+    vo.interpolate_point_data = false;
+    io::write_vtu(o.vtu, mesh, {node_kind_field(mesh)},
+                  {{"quality", 1, r.element_quality},
+                   {"scaled_jacobian", 1, r.element_scaled_jacobian},
+                   {"inverted", 1, inverted}},
+                  vo);
+    std::printf("wrote %s\n", o.vtu.c_str());
+  }
+  if (!o.json.empty()) {
+    io::write_report(o.json, program, HOM_VERSION, json_cases());
+    std::printf("wrote %s\n", o.json.c_str());
+  }
+  return 0;
+}
+
+}  // namespace hom::tools

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# `hom optimize --cad` end to end (chapter 5 through the command line): a
+# curved degree-3 surface mesh of a sphere (written by `hom curve`), whose
+# face nodes are then moved along the sphere (rotated about the axis by a
+# node-dependent angle, so they stay on it but the elements distort), is
+# optimized on the CAD sphere: exit 0, the minimum quality up by more than
+# 0.02 and at least 0.99, no inverted element, every node on the sphere to 1e-9 (as
+# hom evaluates it; the file's vertices too), the
+# report in DESIGN.md's schema. A linear mesh, options that do not apply on a
+# CAD model, a missing model and a surface mesh without --cad are refused
+# with the documented exit status and no output.
+#   $1 = hom
+set -uo pipefail
+hom=$1
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+py=/usr/bin/python3
+[[ -x $py ]] || py=python3
+schema="$(dirname "$0")/check_report_schema.py"
+helper="$(dirname "$0")/sphere_surface_mesh.py"
+
+# json_field FILE STAGE KEY: the surface part's KEY at STAGE.
+json_field() {
+  "$py" -c 'import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["tool"] == "hom optimize", r["tool"]
+c = [c for c in r["cases"] if c["part"] == "surface" and c["stage"] == sys.argv[2]]
+assert len(c) == 1, sys.argv[2]
+print(c[0][sys.argv[3]])' "$@"
+}
+
+"$py" "$helper" model "$work/sphere.brep" || fail "could not write the sphere model (python3-gmsh)"
+log=$("$hom" curve "$work/sphere.brep" --surface --p 3 --size 0.5 -o "$work/curved.msh" --threads 1 2>&1) \
+  || { echo "$log"; fail "hom curve of the sphere failed"; }
+# 0.01 rad: a smoothing case (min quality about 0.96). Larger rotations
+# (0.02-0.04 rad, near the poles) leave folds at element corners that the
+# surface stage does not repair yet (noted on issue 6).
+"$py" "$helper" perturb "$work/curved.msh" "$work/perturbed.msh" 0.01 || fail "could not perturb the mesh"
+
+# 1. The perturbed mesh, optimized on the sphere.
+log=$("$hom" optimize "$work/perturbed.msh" --cad "$work/sphere.brep" -o "$work/opt.msh" --json "$work/opt.json" \
+        --vtu "$work/opt.vtu" --threads 1 2>&1); rc=$?
+echo "$log" | sed 's/^/  [sphere p=3] /'
+[[ $rc -eq 0 ]] || fail "optimize --cad: exit $rc"
+[[ -s "$work/opt.msh" && -s "$work/opt.vtu" ]] || fail "optimize --cad: an output is missing"
+initial=$(json_field "$work/opt.json" initial min_q) || fail "json: no initial stage"
+final=$(json_field "$work/opt.json" optimized min_q) || fail "json: no optimized stage"
+[[ $(json_field "$work/opt.json" optimized inverted) -eq 0 ]] || fail "json: inverted elements after optimization"
+"$py" -c "import sys; sys.exit(0 if float('$final') > float('$initial') + 0.02 and float('$final') >= 0.99 else 1)" \
+  || fail "minimum quality $initial -> $final: not smoothed"
+"$py" "$schema" "$work/opt.json" --tool "hom optimize" --stage initial --stage optimized \
+  || fail "json: not the DESIGN.md schema"
+"$py" -c "import sys; sys.exit(0 if float('$(json_field "$work/opt.json" optimized max_cad_distance)') <= 1e-9 else 1)" \
+  || fail "json: boundary nodes off the CAD"
+"$py" "$helper" check "$work/opt.msh" 1e-9 1e-2 || fail "optimized nodes are not on the sphere"
+
+# 2. Refusals: exit 2 (usage) or 1 (unreadable model), nothing written.
+"$py" "$helper" linear "$work/linear.msh" || fail "could not write a linear sphere mesh"
+expect() {  # expect RC WORD hom-optimize-arguments...
+  local want=$1 word=$2 err rc
+  shift 2
+  err=$("$hom" optimize "$@" -o "$work/x.msh" 2>&1 >/dev/null); rc=$?
+  [[ $rc -eq $want ]] || fail "'$*': exit $rc, expected $want: $err"
+  grep -q -- "$word" <<<"$err" || fail "'$*': the message does not mention $word: $err"
+  [[ ! -e "$work/x.msh" ]] || fail "'$*': output written"
+}
+expect 2 "linear mesh" "$work/linear.msh" --cad "$work/sphere.brep"
+expect 2 "--certify" "$work/perturbed.msh" --cad "$work/sphere.brep" --certify
+expect 2 "--ideal" "$work/perturbed.msh" --cad "$work/sphere.brep" --ideal equilateral
+expect 1 "missing.step" "$work/perturbed.msh" --cad "$work/missing.step"
+expect 2 "--cad" "$work/perturbed.msh"
+echo "cli optimize --cad: ok"
