@@ -7,14 +7,9 @@
 # options and inputs fail with the documented exit status and leave no
 # output behind.
 #   $1 = hom, $2 = make_tangled_mesh (test/make_tangled_mesh.cpp)
-set -uo pipefail
+source "$(dirname "$0")/cli_common.sh"
 hom=$1
 gen=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-py=/usr/bin/python3
-[[ -x $py ]] || py=python3
 
 # check_report JSON PER_FACET WALL_FACETS: five stages, counts, valid result.
 check_report() {

@@ -7,24 +7,11 @@
 # STEP file, a missing file and bad options fail with the documented exit
 # status, a message naming the file, and no output left behind.
 #   $1 = hom
-set -uo pipefail
+source "$(dirname "$0")/cli_common.sh"
 hom=$1
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-py=/usr/bin/python3
-[[ -x $py ]] || py=python3
-schema="$(dirname "$0")/check_report_schema.py"
 
 # json_field FILE PART STAGE KEY
-json_field() {
-  "$py" -c 'import json, sys
-r = json.load(open(sys.argv[1]))
-assert r["tool"] == "hom curve", r["tool"]
-c = [c for c in r["cases"] if c["part"] == sys.argv[2] and c["stage"] == sys.argv[3]]
-assert len(c) == 1, (sys.argv[2], sys.argv[3])
-print(c[0][sys.argv[4]])' "$@"
-}
+json_field() { report_field "$1" "hom curve" "$4" part="$2" stage="$3"; }
 
 # 1. The built-in model at p = 2.
 out="$work/cube.msh"

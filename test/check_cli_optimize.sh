@@ -6,25 +6,12 @@
 # input, bad options and surface meshes fail with the documented exit status
 # and leave no output behind.
 #   $1 = hom, $2 = make_tangled_mesh (test/make_tangled_mesh.cpp)
-set -uo pipefail
+source "$(dirname "$0")/cli_common.sh"
 hom=$1
 gen=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-py=/usr/bin/python3
-[[ -x $py ]] || py=python3
-schema="$(dirname "$0")/check_report_schema.py"   # DESIGN.md's report schema
 
 # json_field FILE STAGE KEY: the KEY of the case whose stage is STAGE.
-json_field() {
-  "$py" -c 'import json, sys
-r = json.load(open(sys.argv[1]))
-assert r["tool"] == "hom optimize", r["tool"]
-c = [c for c in r["cases"] if c["stage"] == sys.argv[2]]
-assert len(c) == 1, sys.argv[2]
-print(c[0][sys.argv[3]])' "$@"
-}
+json_field() { report_field "$1" "hom optimize" "$3" stage="$2"; }
 
 # optimize_case NAME FAMILY P N MSH_VERSION [hom optimize options...]
 optimize_case() {

@@ -10,25 +10,12 @@
 # CAD model, a missing model and a surface mesh without --cad are refused
 # with the documented exit status and no output.
 #   $1 = hom
-set -uo pipefail
+source "$(dirname "$0")/cli_common.sh"
 hom=$1
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-py=/usr/bin/python3
-[[ -x $py ]] || py=python3
-schema="$(dirname "$0")/check_report_schema.py"
 helper="$(dirname "$0")/sphere_surface_mesh.py"
 
 # json_field FILE STAGE KEY: the surface part's KEY at STAGE.
-json_field() {
-  "$py" -c 'import json, sys
-r = json.load(open(sys.argv[1]))
-assert r["tool"] == "hom optimize", r["tool"]
-c = [c for c in r["cases"] if c["part"] == "surface" and c["stage"] == sys.argv[2]]
-assert len(c) == 1, sys.argv[2]
-print(c[0][sys.argv[3]])' "$@"
-}
+json_field() { report_field "$1" "hom optimize" "$3" part=surface stage="$2"; }
 
 "$py" "$helper" model "$work/sphere.brep" || fail "could not write the sphere model (python3-gmsh)"
 log=$("$hom" curve "$work/sphere.brep" --surface --p 3 --size 0.5 -o "$work/curved.msh" --threads 1 2>&1) \

@@ -2,11 +2,8 @@
 # `hom quality` end to end: a valid mesh exits 0, a tangled one exits 3 and
 # counts its inverted element, the JSON and VTU outputs are written, bad
 # input and bad options fail with a message and leave no output behind.
-set -uo pipefail
+source "$(dirname "$0")/cli_common.sh"
 hom=$1
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
 
 # Two tetrahedra sharing the face (1,2,3); apex 5 above it, apex 4 below.
 write_mesh() {  # $1 = file, $2 = z of node 5

@@ -8,16 +8,10 @@
 # bench_certify needs Gmsh's library: skipped when it was not built.
 #   $1 = bench_measures, $2 = bench_ring, $3 = bench_certify (optional; default:
 #   bench_certify beside bench_ring, if built)
-set -uo pipefail
+source "$(dirname "$0")/cli_common.sh"
 measures=$1
 ring=$2
 certify=${3:-$(dirname "$ring")/bench_certify}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-py=/usr/bin/python3
-[[ -x $py ]] || py=python3
-schema="$(dirname "$0")/check_report_schema.py"
 
 # all_checks_hold FILE: the report has a non-empty "checks" list and every claim holds.
 all_checks_hold() {
