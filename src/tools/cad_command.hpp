@@ -47,8 +47,8 @@ inline void print_stage_table(const std::vector<cad::StageReport>& stages) {
 
 /// The classification tolerance of a curved mesh's nodes, relative to the
 /// model's size: a file keeps the curved elements at equispaced points, which
-/// lie on the CAD only up to the interpolation error (1.4e-4 on a unit sphere
-/// of 316 degree-3 triangles, model size 2), and hom's nodes are interpolated
+/// lie on the CAD only up to the interpolation error (1.4e-4 on the unit sphere
+/// meshed with 316 degree-3 triangles), and hom's nodes are interpolated
 /// from them. A face node is much farther than this from any CAD edge, so the
 /// looser tolerance does not move it to one.
 constexpr double curved_relative_tolerance = 1e-3;
