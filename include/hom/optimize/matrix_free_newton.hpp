@@ -160,8 +160,7 @@ struct MatrixFreeNewton {
         out.objective = ls.value;
         out.step = ls.step;
         out.inner = inner;
-        // Levenberg-Marquardt: a full step trusts the model more (smaller
-        // shift), a shortened one means it over-predicted the decrease.
+        // The shift rule of the file comment (lambda_k).
         mu = ls.step < 1.0 ? std::min(mu * s.shift_factor, s.max_shift) : std::max(mu / s.shift_factor, s.initial_shift);
         return out;
       }
