@@ -514,7 +514,9 @@ int main(int argc, char** argv) {
       throw std::invalid_argument("--quadrature: expected default, thesis or reduced, got '" + quadrature + "'");
     if (hessian == "gauss-newton")
       o.hessian = hom::HessianForm::gauss_newton;
-    else if (hessian != "projected")
+    else if (hessian == "projected")
+      o.hessian = hom::HessianForm::projected;
+    else
       throw std::invalid_argument("--hessian: expected projected or gauss-newton, got '" + hessian + "'");
     if (o.solver != "newton" && o.solver != "matrix-free" && o.solver != "gauss-seidel")
       throw std::invalid_argument("--solver: expected newton, matrix-free, gauss-seidel or auto, got '" + o.solver + "'");
