@@ -439,8 +439,8 @@ class Section:
             self.runs.add(run)
         for w in worse_than_thesis(hom or {}, thesis or {}, final):
             self.worse.append("%s: %s." % (label, w))
-        if conditions and conditions not in self.notes:
-            self.notes.append(conditions)
+        if conditions and all(conditions != text for _, text in self.notes):
+            self.notes.append((run, conditions))
 
     def markdown(self):
         out = ["### %s" % heading(self.tid, self.title), ""]
@@ -449,7 +449,9 @@ class Section:
             out += [md_table(header, self.rows), ""]
         out += self.extra
         cond = [CONDITIONS[self.tid]] if self.tid in CONDITIONS else []
-        cond += self.notes
+        # A table fed by several runs says which run each note belongs to.
+        labelled = len({run for run, _ in self.notes if run}) > 1
+        cond += ["run `%s`: %s" % (run, text) if labelled and run else text for run, text in self.notes]
         if cond:
             out += ["Conditions that differ: " + " ".join(sentence(c) for c in cond), ""]
         if self.failed_claims:
