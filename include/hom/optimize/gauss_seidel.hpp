@@ -37,11 +37,11 @@
 ///     element with such a node, and the nodes of invalid elements (delta > 0).
 ///     When that set is empty the next sweep visits every node again. While
 ///     the set is small, one outer iteration makes several passes over it
-///     (max_culled_passes). The set
-///     is computed serially between sweeps, so results still do not depend on
-///     the number of threads. The linear stage of p-continuation uses it: at
-///     p = 10 its first sweep leaves 31 of 1.4 million sub-tetrahedra
-///     inverted, and full sweeps spend the rest of the stage on them.
+///     (max_culled_passes). The set is computed serially between passes, so
+///     results still do not depend on the number of threads. The linear stage
+///     of p-continuation uses it: at p = 10 its first sweep leaves 31 of 1.4
+///     million sub-tetrahedra inverted, and full sweeps spend the rest of the
+///     stage on them.
 /// One outer iteration (solver.hpp) is one sweep over the free nodes.
 
 #include <algorithm>
@@ -228,7 +228,6 @@ struct GaussSeidel {
         active.clear();
         return 0;
       }
-      std::fill(moves.begin(), moves.end(), 0.0);
       int count = 0;
       for (int node : problem.free_nodes()) count += active[node];
       return count;
@@ -240,7 +239,6 @@ struct GaussSeidel {
       refresh_jacobians(problem);
       const bool culling = s.culling_tolerance > 0.0;
       if (culling && inverse_size.empty()) compute_inverse_sizes(problem);
-      if (culling) moves.assign(problem.num_nodes(), 0.0);
       const bool culled = !active.empty();
       int moved = 0, backtracks = 0, active_count = 0;
       std::vector<int> result(problem.num_nodes());
@@ -248,6 +246,7 @@ struct GaussSeidel {
                                        pass < s.max_culled_passes);
            ++pass) {
         std::fill(result.begin(), result.end(), -1);
+        if (culling) moves.assign(problem.num_nodes(), 0.0);
         for (const auto& group : colors.groups) {
           const int size = int(group.size());
           HOM_PARALLEL_FOR_DYNAMIC(detail::useful_threads(problem.threads(), size, 64))
@@ -265,7 +264,7 @@ struct GaussSeidel {
       // A culled sweep that moved nothing is not a failure: the next sweep visits every node.
       if (culled && moved == 0) active.clear();
       out.success = (moved > 0 || culled) && std::isfinite(out.objective);
-      out.step = double(moved) / problem.num_free_nodes();
+      out.step = double(moved) / problem.num_free_nodes();  // relaxations that moved; > 1 after several passes
       out.inner = backtracks;
       (void)f;
       return out;
