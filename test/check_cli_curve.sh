@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `hom curve` end to end: the built-in cube with a spherical cavity at p = 2
-# gives a valid mesh (exit 0; `hom quality` of the written file, an
-# independent read, finds no inverted element; the JSON report has the
+# gives a valid mesh, certified valid with --certify (exit 0; `hom quality`
+# of the written file, an independent read, finds no inverted element; the JSON report has the
 # linear / initial / optimized stages with 0 inverted at the end and follows
 # DESIGN.md's schema; the MSH file carries parametric coordinates); a garbage
 # STEP file, a missing file and bad options fail with the documented exit
@@ -15,7 +15,7 @@ json_field() { report_field "$1" "hom curve" "$4" part="$2" stage="$3"; }
 
 # 1. The built-in model at p = 2.
 out="$work/cube.msh"
-log=$("$hom" curve --p 2 -o "$out" --vtu "$work/cube.vtu" --json "$work/cube.json" --threads 1 2>&1); rc=$?
+log=$("$hom" curve --p 2 -o "$out" --vtu "$work/cube.vtu" --json "$work/cube.json" --threads 1 --certify 2>&1); rc=$?
 echo "$log" | sed 's/^/  [builtin] /'
 [[ $rc -eq 0 ]] || fail "built-in p = 2: exit $rc"
 [[ -s "$out" && -s "$work/cube.vtu" && -s "$work/cube.json" ]] || fail "built-in: an output is missing"
@@ -28,6 +28,18 @@ grep -q "^valid" <<<"$log" || fail "built-in: no validity statement"
 json_field "$work/cube.json" volume linear min_q >/dev/null || fail "json: no linear stage"
 json_field "$work/cube.json" volume initial min_q >/dev/null || fail "json: no initial volume stage"
 [[ $(json_field "$work/cube.json" volume optimized valid) == True ]] || fail "json: result not marked valid"
+# --certify: the volume certified valid everywhere, and hom quality --certify
+# (an independent reading of the written file) agrees.
+elements=$(json_field "$work/cube.json" volume optimized elements)
+[[ $(json_field "$work/cube.json" volume optimized certified_valid) -eq $elements ]] \
+  || fail "json: not every tetrahedron certified valid"
+json_field "$work/cube.json" volume optimized certified_min_scaled_jacobian >/dev/null || fail "json: no certified bound"
+"$hom" quality "$out" --certify --json "$work/cube_q.json" >/dev/null || fail "hom quality --certify of the output failed"
+"$py" - "$work/cube_q.json" "$elements" <<'PY' || fail "hom quality --certify does not certify every element"
+import json, sys
+c = json.load(open(sys.argv[1]))["cases"][0]
+sys.exit(0 if c["certified_valid"] == int(sys.argv[2]) else 1)
+PY
 "$py" "$schema" "$work/cube.json" --tool "hom curve" --stage linear --stage initial --stage optimized \
   || fail "json: not the DESIGN.md schema"
 # MSH 4.1 with parametric node blocks ($Nodes block header "dim tag 1 n").

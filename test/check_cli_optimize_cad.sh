@@ -6,7 +6,8 @@
 # optimized on the CAD sphere: exit 0, the minimum quality up by more than
 # 0.02 and at least 0.99, no inverted element, every node on the sphere to 1e-9 (as
 # hom evaluates it; the file's vertices too), the
-# report in DESIGN.md's schema. A linear mesh, options that do not apply on a
+# report in DESIGN.md's schema. With --certify every element is certified
+# valid and the report says so. A linear mesh, options that do not apply on a
 # CAD model, a missing model and a surface mesh without --cad are refused
 # with the documented exit status and no output.
 #   $1 = hom
@@ -42,7 +43,23 @@ final=$(json_field "$work/opt.json" optimized min_q) || fail "json: no optimized
   || fail "json: boundary nodes off the CAD"
 "$py" "$helper" check "$work/opt.msh" 1e-9 1e-2 || fail "optimized nodes are not on the sphere"
 
-# 2. Refusals: exit 2 (usage) or 1 (unreadable model), nothing written.
+# 2. --certify: each element, projected on its facet's plane, certified valid
+# (Bernstein bounds); the report carries the certificate, and for a surface
+# mesh no scaled-Jacobian bound (that would be the projection's).
+log=$("$hom" optimize "$work/perturbed.msh" --cad "$work/sphere.brep" -o "$work/cert.msh" --json "$work/cert.json" \
+        --certify --threads 1 2>&1); rc=$?
+echo "$log" | sed 's/^/  [sphere p=3 --certify] /'
+[[ $rc -eq 0 ]] || fail "optimize --cad --certify: exit $rc"
+[[ -s "$work/cert.msh" ]] || fail "optimize --cad --certify: no mesh written"
+elements=$(json_field "$work/cert.json" optimized elements) || fail "json: no optimized stage"
+[[ $(json_field "$work/cert.json" optimized certified_valid) -eq $elements ]] || fail "json: not every element certified valid"
+[[ $(json_field "$work/cert.json" optimized certified_invalid) -eq 0 ]] || fail "json: certified invalid elements"
+[[ $(json_field "$work/cert.json" optimized undecided) -eq 0 ]] || fail "json: undecided elements"
+json_field "$work/cert.json" optimized certified_min_scaled_jacobian >/dev/null 2>&1 \
+  && fail "json: a surface mesh reports a scaled-Jacobian bound of its projections"
+grep -q "^  NOT CERTIFIED" <<<"$log" && fail "optimize --cad --certify: prints NOT CERTIFIED on exit 0"
+
+# 3. Refusals: exit 2 (usage) or 1 (unreadable model), nothing written.
 "$py" "$helper" linear "$work/linear.msh" || fail "could not write a linear sphere mesh"
 expect() {  # expect RC WORD hom-optimize-arguments...
   local want=$1 word=$2 err rc
@@ -53,7 +70,6 @@ expect() {  # expect RC WORD hom-optimize-arguments...
   [[ ! -e "$work/x.msh" ]] || fail "'$*': output written"
 }
 expect 2 "linear mesh" "$work/linear.msh" --cad "$work/sphere.brep"
-expect 2 "--certify" "$work/perturbed.msh" --cad "$work/sphere.brep" --certify
 expect 2 "--ideal" "$work/perturbed.msh" --cad "$work/sphere.brep" --ideal equilateral
 expect 1 "missing.step" "$work/perturbed.msh" --cad "$work/missing.step"
 expect 2 "--cad" "$work/perturbed.msh"

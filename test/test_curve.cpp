@@ -8,6 +8,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -259,6 +260,94 @@ TEST_CASE("optimize_on_cad: face nodes slid in (u, v) come back, stay on the sur
   check_nodes_on_cad(r.mesh, m, 1e-10);
   // (the extra parentheses keep the template's comma out of the macro's arguments)
   CHECK_THROWS_AS((cad::optimize_on_cad<Simplex<2>, 3>(m, linear, o)), std::invalid_argument);
+}
+
+TEST_CASE("certify: the planar pipeline's certificate is the result's, and decides validity") {
+  const auto m = cad::plate_with_holes_model();
+  cad::CadMeshOptions mo;
+  mo.size = 0.9;
+  const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+  const auto plain = cad::curve_mesh<Simplex<2>, 2>(m, linear, options(4));
+  CHECK_FALSE(plain.certification);
+  auto o = options(4);
+  o.certify = true;
+  const auto r = cad::curve_mesh<Simplex<2>, 2>(m, linear, o);
+  REQUIRE(r.certification);
+  const auto& c = *r.certification;
+  CHECK_FALSE(c.projected);
+  CHECK(c.valid + c.invalid + c.undecided == r.mesh.num_elements());
+  // An independent certification of the mesh the pipeline returns.
+  CertifyOptions co;
+  co.max_depth = o.certify_depth;
+  const auto again = certify_mesh(r.mesh, co);
+  CHECK(again.valid == c.valid);
+  CHECK(again.invalid == c.invalid);
+  CHECK(again.undecided == c.undecided);
+  CHECK(again.min_scaled_jacobian == doctest::Approx(c.min_scaled_jacobian));
+  CHECK(r.valid == (r.inverted == 0 && r.conformity.ok && c.certified()));
+  check_nodes_on_cad(r.mesh, m, 1e-10 * m.size());
+}
+
+// Two nodes on one face whose parameters are within a tenth of the face's
+// parameter box: no periodic seam between them.
+static bool near_in_parameters(const cad::CadModel& m, const NodeClass& a, const NodeClass& b) {
+  const auto s = m.surface(a.entity->tag);
+  for (int k = 0; k < 2; ++k)
+    if (std::abs(a.params[k] - b.params[k]) > 0.1 * (s.range(k).hi - s.range(k).lo)) return false;
+  return true;
+}
+
+TEST_CASE("certify: a surface element folded in its face's (u, v) is certified invalid, the others valid") {
+  const auto m = cad::nurbs_sphere_model(Eigen::Vector3d::Zero(), 0.5);
+  cad::CadMeshOptions mo;
+  mo.size = 0.25;
+  const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 3>(m, mo);
+  const auto curved = cad::curve_mesh<Simplex<2>, 3>(m, linear, options(3));
+  REQUIRE(curved.valid);
+  cad::CurveOptions o = options(3);
+  o.certify = true;
+  o.optimize_surface = false;  // certify what is given: surfaces have no repair stage
+  const auto good = cad::optimize_on_cad<Simplex<2>, 3>(m, curved.mesh, o);
+  REQUIRE(good.certification);
+  CHECK(good.certification->projected);
+  CHECK(good.certification->reason == RepairStop::certified);
+  CHECK(good.certification->valid == good.mesh.num_elements());
+  CHECK(good.valid);
+
+  // The interior node of a triangle on a face, away from edges and poles,
+  // pushed in (u, v) past its element's first vertex: the element folds.
+  std::vector<int> uses(curved.mesh.num_nodes(), 0);
+  for (int e = 0; e < curved.mesh.num_elements(); ++e)
+    for (int i = 0; i < curved.mesh.nodes_per_element(); ++i) ++uses[curved.mesh.elements()(i, e)];
+  int element = -1, node = -1;
+  for (int e = 0; e < curved.mesh.num_elements() && element < 0; ++e)
+    for (int i = 0; i < curved.mesh.nodes_per_element(); ++i) {
+      const int g = curved.mesh.elements()(i, e);  // used once: the element's interior node
+      const auto& cl = curved.mesh.node_class(g);
+      const auto& c0 = curved.mesh.node_class(curved.mesh.vertex(e, 0));
+      if (uses[g] == 1 && cl.entity && cl.entity->dim == 2 && cl.num_params == 2 && c0.entity &&
+          c0.entity->dim == 2 && c0.entity->tag == cl.entity->tag && std::abs(curved.mesh.node(g).z()) < 0.3 &&
+          near_in_parameters(m, cl, c0)) {
+        element = e;
+        node = g;
+        break;
+      }
+    }
+  REQUIRE(element >= 0);
+  auto folded = curved.mesh;
+  auto& cl = folded.node_class(node);
+  const auto& c0 = folded.node_class(folded.vertex(element, 0));
+  const auto s = m.surface(cl.entity->tag);
+  for (int a = 0; a < 2; ++a)
+    cl.params[a] = s.range(a).normalize(c0.params[a] + 1.5 * (c0.params[a] - cl.params[a]));
+  folded.node(node) = s.evaluate({cl.params[0], cl.params[1]});
+  const auto bad = cad::optimize_on_cad<Simplex<2>, 3>(m, folded, o);
+  REQUIRE(bad.certification);
+  const auto& u = bad.certification->uncertified;
+  CHECK(std::find(u.begin(), u.end(), element) != u.end());
+  CHECK(bad.certification->reason == RepairStop::not_repaired);
+  CHECK(bad.certification->valid + int(u.size()) == bad.mesh.num_elements());
+  CHECK_FALSE(bad.valid);
 }
 
 TEST_CASE("a mesh that does not fit the model is an error naming what is wrong") {

@@ -244,7 +244,54 @@ class Pipeline {
     out.inverted = out.stages.back().quality.inverted;
     out.conformity = check_on_cad<Family, SpaceDim>(mesh_, cad_, o_.tolerance * cad_.size());
     out.valid = out.inverted == 0 && out.conformity.ok;
+    if (o_.certify) {
+      if constexpr (surface) certification_ = certify_faces();
+      const auto& c = *certification_;
+      say("certified: " + std::to_string(c.valid) + " valid, " + std::to_string(c.invalid) + " invalid, " +
+          std::to_string(c.undecided) + " undecided (" + fmt_s(c.time_s) + ")");
+      out.valid = out.valid && c.certified();
+      out.certification = std::move(certification_);
+    }
     out.mesh = std::move(mesh_);
+  }
+
+  CertifyOptions certify_options() const {
+    CertifyOptions co;
+    co.max_depth = o_.certify_depth;
+    co.threads = o_.threads;
+    return co;
+  }
+
+  /// A surface mesh's certificate, of the element a solver reads: the degree-p
+  /// polynomial through the nodes in R^3, x(xi), projected on the plane of its
+  /// straight-sided facet, oriented as the face's S_u x S_v
+  /// (build_face_meshes). det [x_xi, x_eta, N] is then a polynomial
+  /// certified as a planar element's. Certified valid means the element's
+  /// tangent plane never turns over against N, so it has no fold; a
+  /// negative value means a fold, or an element turning by more than 90
+  /// degrees away from its facet. (The map S o u of chapter 5 is not
+  /// certified: at a pole, where S_u = 0, one (u, v) per node folds it near
+  /// the pole for any polynomial u, although x(xi) is fine there.)
+  CertificationOutcome certify_faces() const {
+    const auto t0 = Clock::now();
+    const CertifyOptions co = certify_options();
+    const auto& jb = jacobian_bernstein<PF, WarpBlend>(o_.p);
+    std::vector<ElementCertificate<PF>> certificates(mesh_.num_elements());
+    for (const auto& fm : face_meshes_)
+      for (int e = 0; e < fm.mesh.num_elements(); ++e) {
+        const auto X = fm.mesh.element_coordinates(e);
+        const Eigen::Vector3d x0 = X.col(0), x1 = X.col(1), x2 = X.col(2);
+        const Eigen::Vector3d normal = PF::is_simplex ? (x1 - x0).cross(x2 - x0) : (x2 - x0).cross(X.col(3) - x1);
+        Eigen::Matrix<double, 2, 3> frame;
+        frame.row(0) = (x1 - x0).normalized().transpose();
+        frame.row(1) = normal.normalized().cross((x1 - x0).normalized()).transpose();
+        const Eigen::Matrix<double, 2, Eigen::Dynamic> projected = frame * X;
+        certificates[fm.patch[e]] = certify_element<PF>(jb, projected, co);
+      }
+    CertificationOutcome c = certification_outcome(certificates, RepairStop::not_repaired);
+    c.projected = true;
+    c.time_s = since(t0);
+    return c;
   }
 
   static const char* part() { return volume ? "volume" : planar ? "planar" : "surface"; }
@@ -776,6 +823,9 @@ class Pipeline {
     opt.iterations_after_valid = o_.iterations_after_valid;
     opt.continuation_iterations_after_valid = o_.iterations_after_valid;
     opt.verbose = o_.verbose;
+    opt.certify = o_.certify;
+    opt.certify_depth = o_.certify_depth;
+    opt.certify_rounds = o_.certify_rounds;
     const auto t0 = Clock::now();
     int iterations = 0;
     std::string reason = "none";
@@ -783,6 +833,11 @@ class Pipeline {
       const auto r = hom::optimize<Measure, DefaultExactness>(mesh_, opt, measure_);
       iterations = r.result.iterations + (r.continuation ? r.continuation->iterations : 0);
       reason = std::string(to_string(r.result.reason));
+      certification_ = r.certification;
+    } else if (o_.certify) {
+      const auto tc = Clock::now();
+      certification_ = certification_outcome(certify_mesh(mesh_, certify_options()).elements, RepairStop::no_free_nodes);
+      certification_->time_s = since(tc);
     }
     const double t = since(t0);
     final_ = mesh_quality(mesh_, measure_, IdealKind::straight_sided, rule());
@@ -813,6 +868,7 @@ class Pipeline {
   std::map<std::pair<int, int>, EdgeInfo> edges_;
   std::vector<FacePatchMesh> face_meshes_;
   MeshQuality final_;
+  std::optional<CertificationOutcome> certification_;  ///< CurveOptions::certify
 };
 
 }  // namespace

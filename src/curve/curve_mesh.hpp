@@ -50,6 +50,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,7 @@
 #include "hom/io/msh_data.hpp"
 #include "hom/mesh/mesh.hpp"
 #include "hom/nodes/warp_blend.hpp"
+#include "hom/optimize/certified.hpp"
 #include "hom/quality/statistics.hpp"
 
 namespace hom::cad {
@@ -87,6 +89,16 @@ struct CurveOptions {
   std::function<void(const std::string&)> progress;
   /// Boundary nodes must lie on their CAD entity within tolerance * model size.
   double tolerance = 1e-9;
+  /// Certification as the final acceptance test (issue 8). A volume or
+  /// planar mesh: hom::optimize's certify stage (optimize/certified.hpp)
+  /// after the domain stage, its repair rounds moving interior nodes only (the
+  /// boundary stays on the CAD). A surface mesh: each element, projected on
+  /// the plane of its straight-sided facet, is certified, without repair
+  /// (Pipeline::certify_faces). An uncertified result is not valid
+  /// (CurveResult::valid).
+  bool certify = false;
+  int certify_depth = CertifyOptions{}.max_depth;      ///< subdivision levels before "undecided"
+  int certify_rounds = CertifyRepairOptions{}.max_rounds;  ///< repair rounds at most (0: certify only)
 };
 
 /// One row of the statistics table.
@@ -123,7 +135,11 @@ struct CurveResult {
   /// last stage's evaluation; for a surface mesh, oriented by its CAD face).
   std::vector<double> element_quality, element_scaled_jacobian;
   std::vector<bool> element_valid;
-  bool valid = false;                ///< inverted == 0 and conformity.ok
+  /// The certificate (CurveOptions::certify), element numbers those of `mesh`.
+  std::optional<CertificationOutcome> certification;
+  /// inverted == 0 and conformity.ok, and with CurveOptions::certify every
+  /// element certified valid.
+  bool valid = false;
   double time_s = 0.0;               ///< whole pipeline (without the linear meshing)
 };
 

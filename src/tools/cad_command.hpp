@@ -16,6 +16,7 @@
 
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
+#include "certification_report.hpp"
 #include "curve_mesh.hpp"
 #include "hom/io/report.hpp"
 #include "mesh_io.hpp"
@@ -81,7 +82,8 @@ void classify_user_mesh(MeshT& mesh, const cad::CadModel& cad, double tolerance)
 /// only optimizes it on the model (cad::optimize_on_cad), checks the result
 /// and writes it. The check: every element valid at every quadrature point,
 /// det D phi > 0 at every node (>= 0 on surfaces, whose normal vanishes at a
-/// pole) and every boundary node on its CAD entity. An invalid result writes
+/// pole), every boundary node on its CAD entity and, with
+/// CurveOptions::certify, every element certified valid. An invalid result writes
 /// no mesh (only the JSON report, which says what happened). Returns the exit
 /// status: 0 written, 3 invalid.
 template <class MeshT>
@@ -111,6 +113,8 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   const double rss = peak_rss_mb();
   std::printf("boundary on the CAD: %d nodes checked, largest distance %.3g\n", r.conformity.checked,
               r.conformity.max_distance);
+  if (r.certification) print_certification(*r.certification, co.certify_depth);
+  const bool uncertified = r.certification && !r.certification->certified();
   const bool valid = r.valid && folded_at_nodes == 0;
   const char* cmd = o.command.c_str();
   if (!valid) {
@@ -119,13 +123,19 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
                    cmd, r.inverted, r.mesh.num_elements());
     else if (!r.conformity.ok)
       std::fprintf(stderr, "hom: %s: INVALID result: %s; nothing written\n", cmd, r.conformity.problem.c_str());
+    else if (uncertified)
+      std::fprintf(stderr,
+                   "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish between "
+                   "quadrature points); nothing written\n",
+                   cmd, int(r.certification->uncertified.size()), r.mesh.num_elements());
     else
       std::fprintf(stderr,
                    "hom: %s: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
                    "valid: a fold at an element corner); nothing written\n",
                    cmd, folded_at_nodes);
   } else {
-    std::printf("valid: every element valid at every quadrature point and node, every boundary node on its CAD entity\n");
+    std::printf("valid: every element valid at every quadrature point and node%s, every boundary node on its CAD entity\n",
+                r.certification ? " and certified valid everywhere" : "");
   }
 
   const std::string program = "hom " + o.command;
@@ -147,12 +157,14 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
       if (s.stage == "optimized" && s.part != "surface") c.set("p_continuation", s.p_continuation);
       cases.push_back(std::move(c));
     }
-    if (!cases.empty())
+    if (!cases.empty()) {
       cases.back()
           .set("valid", valid)
           .set("elements_folded_at_nodes", folded_at_nodes)
           .set("max_cad_distance", r.conformity.max_distance)
           .set("output", valid ? io::Json(o.out) : io::Json());
+      if (r.certification) add_certification(cases.back(), *r.certification, co.certify_depth);
+    }
     return cases;
   };
   if (!valid) {

@@ -2,6 +2,7 @@
 //           [--size H] [--size-curvature N] [--surface] [--quads]
 //           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
 //           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
+//           [--certify [--certify-depth N] [--certify-rounds N]]
 //
 // Chapter 6's a posteriori generation of a curved high-order mesh from CAD
 // (src/curve/curve_mesh.hpp): a linear mesh of the model (Gmsh with the
@@ -21,7 +22,12 @@
 // every quadrature point (against its straight-sided ideal; surface elements
 // oriented by their CAD face) and det D phi > 0 at every node (>= 0 on
 // surfaces, whose normal vanishes at a pole), and every boundary node on its
-// CAD entity at its parameters. An invalid result writes nothing.
+// CAD entity at its parameters. An invalid result writes nothing. --certify
+// adds certification (issue 8): the sign of det D phi_P bounded everywhere in
+// each element (Bernstein coefficients), folds between quadrature points
+// repaired by moving interior nodes (optimize/certified.hpp); a surface mesh
+// is certified element by element, each projected on its facet's plane,
+// without repair. An uncertified result is invalid.
 //
 // Exit status: 0 valid mesh written; 3 the result is invalid (nothing
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
@@ -64,6 +70,9 @@ struct CurveCli {
   double tolerance = 1e-6;
   int iterations_after_valid = -1;
   bool verbose = false;
+  bool certify = false;
+  int certify_depth = hom::cad::CurveOptions{}.certify_depth;
+  int certify_rounds = hom::cad::CurveOptions{}.certify_rounds;
 };
 
 void check_options(const CurveCli& o) {
@@ -92,6 +101,9 @@ void check_options(const CurveCli& o) {
   if (o.size_curvature < 0) throw UsageError("curve: --size-curvature must be >= 0");
   if (o.threads < 0) throw UsageError("curve: --threads must be >= 0 (0: OpenMP's default)");
   if (!(o.tolerance > 0)) throw UsageError("curve: --tolerance must be positive");
+  if (o.certify_depth < 0 || o.certify_depth > 20)
+    throw UsageError("curve: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
+  if (o.certify_rounds < 0) throw UsageError("curve: --certify-rounds must be >= 0");
   if (o.mesh.empty() == false && (o.size > 0 || o.size_curvature > 0))
     throw UsageError("curve: --size and --size-curvature apply to the built-in mesher, not to --mesh");
 }
@@ -112,6 +124,9 @@ hom::tools::CadCommandOptions cad_command_options(const CurveCli& o) {
   c.curve.threads = o.threads;
   c.curve.iterations_after_valid = o.iterations_after_valid;
   c.curve.verbose = o.verbose;
+  c.curve.certify = o.certify;
+  c.curve.certify_depth = o.certify_depth;
+  c.curve.certify_rounds = o.certify_rounds;
   return c;
 }
 
@@ -151,6 +166,13 @@ int run(int argc, char** argv) {
        "volume stage: stop once valid this many iterations (-1: optimize to convergence)")         //
       ("tolerance", po::value(&o.tolerance)->default_value(1e-6),
        "--mesh: classification tolerance, relative to the model's size")                             //
+      ("certify", po::bool_switch(&o.certify),
+       "certify the sign of det everywhere in each element (Bernstein bounds), repair folds between quadrature "
+       "points by moving interior nodes; an uncertified result is not written")  //
+      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
+       "subdivision levels before an element is undecided (0..20)")  //
+      ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
+       "repair rounds at most (0: certify only)")  //
       ("vtu", po::value(&o.vtu), "write the curved mesh colored by quality (ParaView)")              //
       ("json", po::value(&o.json), "write the statistics of every stage as JSON")                    //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per optimizer iteration (stderr)");

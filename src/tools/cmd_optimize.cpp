@@ -7,6 +7,7 @@
 //                                [--json FILE] [--vtu FILE] [-v|--verbose]
 // hom optimize IN.msh --cad MODEL.step|.iges|.brep -o OUT.msh [--solver S] [--pcont]
 //                                [--measure shape|oddy] [--threads N] [--max-iterations N]
+//                                [--certify [--certify-depth N] [--certify-rounds N]]
 //                                [--tolerance T] [--json FILE] [--vtu FILE] [-v]
 //
 // Smooths and untangles a curved high-order mesh whose boundary is already
@@ -28,7 +29,10 @@
 // quadrature points but folded between them are optimized further with the
 // failing points added to their quadrature (optimize/certified.hpp), and the
 // certificate of the result is printed and added to the JSON with hom quality
-// --certify's keys.
+// --certify's keys. With --cad the same stage runs on the volume or planar
+// mesh after the CAD pipeline; a surface mesh is certified element by
+// element, each projected on its facet's plane, without repair
+// (curve_mesh.hpp), and an uncertified result is not written.
 //
 // Exit status: 0 the optimized mesh is valid at every quadrature point (with
 // --certify: every element certified valid), 3 otherwise (the outputs are
@@ -44,6 +48,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "certification_report.hpp"
 #include "command.hpp"
 #include "hom/io/report.hpp"
 #include "hom/measure/oddy_measure.hpp"
@@ -207,37 +212,10 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
       hom::CertifyOptions co;
       co.max_depth = o.certify_depth;
       co.threads = o.threads;
-      const auto c = hom::certify_mesh(mesh, co);
-      certification.emplace();
-      certification->initial_valid = certification->valid = c.valid;
-      certification->initial_invalid = certification->invalid = c.invalid;
-      certification->initial_undecided = certification->undecided = c.undecided;
-      certification->min_scaled_jacobian = c.min_scaled_jacobian;
-      certification->reason = c.invalid + c.undecided > 0 ? hom::RepairStop::no_free_nodes : hom::RepairStop::certified;
-      for (int e = 0; e < mesh.num_elements(); ++e)
-        if (c.elements[e].status != hom::Certificate::certified_valid) certification->uncertified.push_back(e);
+      certification = hom::certification_outcome(hom::certify_mesh(mesh, co).elements, hom::RepairStop::no_free_nodes);
     }
   }
-  if (certification) {
-    const auto& c = *certification;
-    std::printf("certified (Bernstein bounds of det D phi_P, subdivision depth <= %d):\n", o.certify_depth);
-    std::printf("  after optimization: %d certified valid, %d certified invalid, %d undecided\n", c.initial_valid,
-                c.initial_invalid, c.initial_undecided);
-    if (c.rounds > 0) {
-      int iterations = 0;
-      for (const auto& r : c.repairs) iterations += r.iterations;
-      std::printf("  repair: %d round%s (%d iterations, %d sentinel points), stopped on %s, %.3f s%s\n", c.rounds,
-                  c.rounds == 1 ? "" : "s", iterations, c.sentinel_points, std::string(hom::to_string(c.reason)).c_str(),
-                  c.time_s, c.restored ? "; no fewer uncertified elements, so the optimized mesh is kept" : "");
-    }
-    std::printf("  final: %d certified valid, %d certified invalid, %d undecided; certified min scaled Jacobian >= %.4f\n",
-                c.valid, c.invalid, c.undecided, c.min_scaled_jacobian);
-    if (!c.certified()) {
-      std::printf("  NOT CERTIFIED: elements");
-      for (std::size_t k = 0; k < c.uncertified.size() && k < 10; ++k) std::printf(" %d", c.uncertified[k]);
-      std::printf("%s (%s)\n", c.uncertified.size() > 10 ? " ..." : "", std::string(hom::to_string(c.reason)).c_str());
-    }
-  }
+  if (certification) hom::tools::print_certification(*certification, o.certify_depth);
 
   // Outputs only once the optimization is done, each written atomically.
   hom::io::write_msh(o.out, mesh, same_format_as(data));
@@ -283,21 +261,7 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
         .set("converged", result ? result->result.converged : true)
         .set("time_s", result ? result->time_s : 0.0)
         .set("peak_rss_mb", peak_rss_mb());
-    if (certification) {
-      const auto& c = *certification;
-      optimized.set("certified_valid", c.valid)
-          .set("certified_invalid", c.invalid)
-          .set("undecided", c.undecided)
-          .set("certified_min_scaled_jacobian", c.min_scaled_jacobian)
-          .set("certify_max_depth", o.certify_depth)
-          .set("certify_rounds", c.rounds)
-          .set("certify_stop_reason", std::string(hom::to_string(c.reason)))
-          .set("certify_restored", c.restored)
-          .set("certify_time_s", c.time_s)
-          .set("initial_certified_valid", c.initial_valid)
-          .set("initial_certified_invalid", c.initial_invalid)
-          .set("initial_undecided", c.initial_undecided);
-    }
+    if (certification) hom::tools::add_certification(optimized, *certification, o.certify_depth);
     hom::io::write_report(o.json, "hom optimize", HOM_VERSION, {make_case("initial", initial), std::move(optimized)});
     std::printf("wrote %s\n", o.json.c_str());
   }
@@ -330,6 +294,9 @@ int optimize_on_cad(const OptimizeCli& o) {
   c.curve.max_iterations = o.max_iterations;
   c.curve.surface_max_iterations = o.max_iterations;
   c.curve.verbose = o.verbose;
+  c.curve.certify = o.certify;
+  c.curve.certify_depth = o.certify_depth;
+  c.curve.certify_rounds = o.certify_rounds;
   const auto data = hom::io::read_msh_data(o.in);
   return hom::tools::with_mesh<hom::WarpBlend>(data, [&](auto& mesh) -> int {
     using F = typename std::decay_t<decltype(mesh)>::family;
@@ -388,7 +355,6 @@ void check_options(OptimizeCli& o) {
     refuse(o.quadrature != "default", "--quadrature thesis");
     refuse(o.scope != "invalid", "--scope whole-mesh");
     refuse(o.vertex_continuation, "--vertex-continuation");
-    refuse(o.certify, "--certify");
     if (!(o.tolerance > 0)) throw UsageError("optimize: --tolerance must be positive");
   }
   if (o.vtu == o.out || (!o.json.empty() && (o.json == o.out || o.json == o.vtu)))

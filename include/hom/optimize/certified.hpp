@@ -77,6 +77,7 @@ enum class RepairStop {
   no_free_nodes,  ///< the uncertified elements have no free node within one element
   held,           ///< each uncertified element folds at a point where only held nodes determine det
   worse,          ///< the last round left more elements invalid or uncertified; it was undone
+  not_repaired,   ///< certified only: no repair stage ran (surface meshes)
 };
 
 inline std::string_view to_string(RepairStop s) {
@@ -87,6 +88,7 @@ inline std::string_view to_string(RepairStop s) {
     case RepairStop::no_free_nodes: return "no free nodes";
     case RepairStop::held: return "fold fixed by held nodes";
     case RepairStop::worse: return "round undone";
+    case RepairStop::not_repaired: return "certified only, no repair stage";
   }
   return "?";
 }
@@ -111,6 +113,11 @@ struct CertificationOutcome {
   std::vector<int> uncertified;       ///< elements not certified valid at the end, ascending
   std::vector<SolverResult> repairs;  ///< each round's local solve
   double time_s = 0.0;                ///< certification and repair
+  /// A surface mesh, each element's polynomial map in R^3 projected on the
+  /// plane of its straight-sided facet and certified there (cad::CurveOptions::
+  /// certify). min_scaled_jacobian then bounds the projected element's, not
+  /// the surface element's, and is not reported.
+  bool projected = false;
 
   bool certified() const { return invalid == 0 && undecided == 0; }
 };
@@ -150,6 +157,26 @@ CertifyCounts count_certificates(const Certificates& c) {
 }
 
 }  // namespace detail
+
+/// The outcome of a certification without repair: counts, bound and
+/// uncertified elements of `elements` (one certificate per element, in
+/// element order); `reason` is RepairStop::certified when every element is
+/// certified valid, `if_uncertified` otherwise.
+template <ElementFamily Family>
+CertificationOutcome certification_outcome(const std::vector<ElementCertificate<Family>>& elements,
+                                           RepairStop if_uncertified) {
+  CertificationOutcome out;
+  const auto n = detail::count_certificates(elements);
+  out.initial_valid = out.valid = n.valid;
+  out.initial_invalid = out.invalid = n.invalid;
+  out.initial_undecided = out.undecided = n.undecided;
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    out.min_scaled_jacobian = std::min(out.min_scaled_jacobian, elements[e].min_scaled_jacobian);
+    if (elements[e].status != Certificate::certified_valid) out.uncertified.push_back(int(e));
+  }
+  out.reason = out.certified() ? RepairStop::certified : if_uncertified;
+  return out;
+}
 
 /// Certifies every element of `mesh` and repairs the uncertified ones as the
 /// file comment describes, moving free nodes of `mesh` in place. `solver`,
@@ -344,14 +371,12 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
     cert = std::move(start_cert);
     out.restored = true;
   }
-  const auto n = detail::count_certificates(cert);
-  out.valid = n.valid;
-  out.invalid = n.invalid;
-  out.undecided = n.undecided;
-  for (int e = 0; e < ne; ++e) {
-    out.min_scaled_jacobian = std::min(out.min_scaled_jacobian, cert[e].min_scaled_jacobian);
-    if (cert[e].status != Certificate::certified_valid) out.uncertified.push_back(e);
-  }
+  const CertificationOutcome final_state = certification_outcome(cert, out.reason);
+  out.valid = final_state.valid;
+  out.invalid = final_state.invalid;
+  out.undecided = final_state.undecided;
+  out.min_scaled_jacobian = final_state.min_scaled_jacobian;
+  out.uncertified = final_state.uncertified;
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -1,0 +1,54 @@
+#pragma once
+/// @file certification_report.hpp
+/// How `hom optimize --certify` and `hom curve --certify` tell the outcome of
+/// the certify stage (optimize/certified.hpp): a few lines on stdout and the
+/// JSON keys of `hom quality --certify` plus the stage's own (DESIGN.md).
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "hom/io/json.hpp"
+#include "hom/optimize/certified.hpp"
+
+namespace hom::tools {
+
+inline void print_certification(const CertificationOutcome& c, int max_depth) {
+  std::printf("certified (Bernstein bounds of det D phi_P, subdivision depth <= %d%s):\n", max_depth,
+              c.projected ? ", each surface element projected on its facet's plane" : "");
+  std::printf("  after optimization: %d certified valid, %d certified invalid, %d undecided\n", c.initial_valid,
+              c.initial_invalid, c.initial_undecided);
+  if (c.rounds > 0) {
+    int iterations = 0;
+    for (const auto& r : c.repairs) iterations += r.iterations;
+    std::printf("  repair: %d round%s (%d iterations, %d sentinel points), stopped on %s, %.3f s%s\n", c.rounds,
+                c.rounds == 1 ? "" : "s", iterations, c.sentinel_points, std::string(to_string(c.reason)).c_str(),
+                c.time_s, c.restored ? "; no fewer uncertified elements, so the optimized mesh is kept" : "");
+  }
+  std::printf("  final: %d certified valid, %d certified invalid, %d undecided", c.valid, c.invalid, c.undecided);
+  if (!c.projected) std::printf("; certified min scaled Jacobian >= %.4f", c.min_scaled_jacobian);
+  std::printf("\n");
+  if (!c.certified()) {
+    std::printf("  NOT CERTIFIED: elements");
+    for (std::size_t k = 0; k < c.uncertified.size() && k < 10; ++k) std::printf(" %d", c.uncertified[k]);
+    std::printf("%s (%s)\n", c.uncertified.size() > 10 ? " ..." : "", std::string(to_string(c.reason)).c_str());
+  }
+}
+
+/// Adds the certificate's keys to a report case. A surface mesh's bound is of
+/// its projected elements, so it has no certified_min_scaled_jacobian.
+inline void add_certification(io::Json& c, const CertificationOutcome& o, int max_depth) {
+  c.set("certified_valid", o.valid).set("certified_invalid", o.invalid).set("undecided", o.undecided);
+  if (!o.projected && std::isfinite(o.min_scaled_jacobian))
+    c.set("certified_min_scaled_jacobian", o.min_scaled_jacobian);
+  c.set("certify_max_depth", max_depth)
+      .set("certify_rounds", o.rounds)
+      .set("certify_stop_reason", std::string(to_string(o.reason)))
+      .set("certify_restored", o.restored)
+      .set("certify_time_s", o.time_s)
+      .set("initial_certified_valid", o.initial_valid)
+      .set("initial_certified_invalid", o.initial_invalid)
+      .set("initial_undecided", o.initial_undecided);
+}
+
+}  // namespace hom::tools
