@@ -5,7 +5,10 @@
 # linear / initial / optimized stages with 0 inverted at the end and follows
 # DESIGN.md's schema; the MSH file carries parametric coordinates); a garbage
 # STEP file, a missing file and bad options fail with the documented exit
-# status, a message naming the file, and no output left behind.
+# status, a message naming the file, and no output left behind. --bl-first
+# adds a boundary layer on the cavity (the default wall: the faces off the
+# bounding box): every stage reported, the result valid with its wall on the
+# CAD, and bad boundary-layer options refused.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -80,4 +83,30 @@ for args in "--p 1 -o $work/b.msh" "--p 3 -o $work/b.vtu" "--p 3 -o $work/b.msh 
   [[ $rc -eq 2 ]] || fail "bad options '$args': exit $rc, expected 2"
 done
 [[ ! -e "$work/b.msh" && ! -e "$work/b.vtu" ]] || fail "bad options: output written"
+
+# 5. A boundary layer on the cavity: 2 layers from 0.01, growing by 2, p = 2.
+bl="$work/bl.msh"
+log=$("$hom" curve --p 2 --bl-first 0.01 --bl-layers 2 -o "$bl" --json "$work/bl.json" --threads 1 --certify 2>&1); rc=$?
+echo "$log" | sed 's/^/  [layer] /'
+[[ $rc -eq 0 && -s "$bl" ]] || fail "boundary layer: exit $rc or no mesh written"
+grep -q "wall faces: [0-9]" <<<"$log" || fail "boundary layer: the wall faces are not named"
+"$py" - "$work/bl.json" <<'PY' || fail "boundary layer: JSON stages wrong"
+import json, sys
+cases = json.load(open(sys.argv[1]))["cases"]
+stages = [c["stage"] for c in cases]
+assert stages == ["inviscid", "inserted", "smoothed", "curved", "optimized"], stages
+last = cases[-1]
+assert last["p"] == 2 and last["inverted"] == 0 and last["valid"] is True, last
+assert cases[1]["elements"] > cases[0]["elements"], "no layer elements inserted"
+assert last["aspect_ratio"] > 1 and last["layers"] == 2 and last["first_height"] == 0.01, last
+assert last["max_cad_distance"] < 1e-6, last["max_cad_distance"]
+assert last["certified_valid"] == last["elements"], last
+PY
+"$hom" quality "$bl" >/dev/null || fail "boundary layer: hom quality of the output finds inverted elements"
+for args in "--bl-first -1" "--bl-growth 3" "--bl-first 0.01 --bl-growth 0.5" "--bl-first 0.01 --surface" \
+            "--bl-first 0.01 --measure oddy" "--bl-first 0.01 --bl-walls 99" "--bl-first 0.01 --bl-walls x"; do
+  err=$("$hom" curve --p 2 -o "$work/blbad.msh" --threads 1 $args 2>&1 >/dev/null); rc=$?
+  [[ $rc -eq 2 ]] || fail "bad boundary-layer options '$args': exit $rc, expected 2: $err"
+done
+[[ ! -e "$work/blbad.msh" ]] || fail "bad boundary-layer options: output written"
 echo "OK"

@@ -22,13 +22,13 @@
 
 #include <cstdio>
 #include <set>
-#include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
 
 #include <boost/program_options.hpp>
 
+#include "boundary_layer_report.hpp"
 #include "command.hpp"
 #include "hom/geometry/circle.hpp"
 #include "hom/geometry/sphere.hpp"
@@ -50,31 +50,6 @@ struct BoundaryLayerCli {
   int layers = 7, p = 2, threads = 0, max_iterations = 200;
   bool verbose = false;
 };
-
-std::vector<double> parse_numbers(const std::string& s, const std::string& what) {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      v.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw UsageError("boundary-layer: " + what + ": '" + item + "' is not a number");
-    }
-  }
-  return v;
-}
-
-std::vector<int> parse_tags(const std::string& s) {
-  std::vector<int> tags;
-  for (double x : parse_numbers(s, "--walls"))
-    if (x != double(int(x))) throw UsageError("boundary-layer: --walls takes integer tags");
-    else tags.push_back(int(x));
-  if (tags.empty()) throw UsageError("boundary-layer: --walls needs at least one tag");
-  return tags;
-}
 
 /// Entity tags of the walls: physical groups of dimension Dim - 1 first.
 template <class MeshT>
@@ -107,7 +82,9 @@ hom::GeometryModel<Dim> wall_geometry(const std::string& spec, const std::vector
   if (spec == "none" || spec == "plane") return g;
   const auto colon = spec.find(':');
   const std::string kind = spec.substr(0, colon);
-  const auto v = colon == std::string::npos ? std::vector<double>{} : parse_numbers(spec.substr(colon + 1), "--wall-geometry");
+  const auto v = colon == std::string::npos
+                     ? std::vector<double>{}
+                     : hom::tools::parse_number_list("boundary-layer", "--wall-geometry", spec.substr(colon + 1));
   if constexpr (Dim == 3) {
     if (kind != "sphere" || v.size() != 4)
       throw UsageError("boundary-layer: --wall-geometry for a tetrahedral mesh: sphere:cx,cy,cz,r, plane or none; got '" +
@@ -124,22 +101,13 @@ hom::GeometryModel<Dim> wall_geometry(const std::string& spec, const std::vector
   return g;
 }
 
-void print_stages(const std::vector<hom::BoundaryLayerStage>& stages) {
-  std::printf("  %-10s %2s %8s %8s %7s %7s %7s %8s %6s %5s %8s\n", "stage", "p", "#elems", "#nodes", "Min", "Max", "Mean",
-              "Std.Dev.", "#inv", "iter", "time[s]");
-  for (const auto& s : stages)
-    std::printf("  %-10s %2d %8d %8d %7.4f %7.4f %7.4f %8.4f %6d %5d %8.3f\n", s.name.c_str(), s.p, s.elements, s.nodes,
-                s.quality.min, s.quality.max, s.quality.mean, s.quality.std_dev, s.quality.inverted, s.iterations,
-                s.time_s);
-}
-
 template <class MeshT>
 int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
   constexpr int D = MeshT::dim;
   if (mesh.degree() != 1)
     throw UsageError("boundary-layer: " + o.in + " has degree " + std::to_string(mesh.degree()) +
                      "; the boundary layer is inserted into a linear mesh");
-  const auto walls = wall_entities(mesh, parse_tags(o.walls));
+  const auto walls = wall_entities(mesh, hom::tools::parse_tag_list("boundary-layer", "--walls", o.walls));
   const auto geometry = wall_geometry<D>(o.geometry, walls);
   hom::BoundaryLayerPipelineOptions opt;
   opt.layer = {.first_height = o.first, .growth = o.growth, .layers = o.layers, .extrusion_fraction = o.extrusion};
@@ -158,7 +126,7 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
               o.first, o.growth, opt.layer.total_height(), o.extrusion, o.p, o.geometry.c_str());
   std::fflush(stdout);
   const auto r = hom::boundary_layer_pipeline<D>(mesh, walls, geometry, opt);
-  print_stages(r.stages);
+  hom::tools::print_boundary_layer_stages(r.stages);
   std::printf("\nlargest aspect ratio of the ideal layer elements: %.4g\n", r.layer.max_aspect_ratio);
   std::printf("%s\n", r.valid ? "valid at every quadrature point" : "INVALID: some elements have det <= 0 at a quadrature point");
 
@@ -177,20 +145,7 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
     std::printf("wrote %s\n", o.vtu.c_str());
   }
   if (!o.json.empty()) {
-    std::vector<hom::io::Json> cases;
-    for (const auto& s : r.stages) {
-      hom::io::CaseHeader h{o.in, std::string(hom::Simplex<D>::name), s.p, s.elements, s.nodes, s.name, "shape", s.ideal};
-      auto c = hom::io::quality_case(h, s.quality, s.scaled_jacobian);
-      c.set("time_s", s.time_s)
-          .set("iterations", s.iterations)
-          .set("aspect_ratio", r.layer.max_aspect_ratio)
-          .set("layers", o.layers)
-          .set("first_height", o.first)
-          .set("growth", o.growth);
-      if (!s.stop_reason.empty()) c.set("stop_reason", s.stop_reason).set("converged", s.converged);
-      cases.push_back(std::move(c));
-    }
-    hom::io::write_report(o.json, "hom boundary-layer", HOM_VERSION, std::move(cases));
+    hom::io::write_report(o.json, "hom boundary-layer", HOM_VERSION, hom::tools::boundary_layer_cases(o.in, r, opt.layer));
     std::printf("wrote %s\n", o.json.c_str());
   }
   return r.valid ? 0 : 3;

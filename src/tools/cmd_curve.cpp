@@ -3,6 +3,7 @@
 //           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
 //           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
 //           [--certify [--certify-depth N] [--certify-rounds N]]
+//           [--bl-first H [--bl-growth G] [--bl-layers N] [--bl-walls TAGS] [--bl-extrusion F]]
 //
 // Chapter 6's a posteriori generation of a curved high-order mesh from CAD
 // (src/curve/curve_mesh.hpp): a linear mesh of the model (Gmsh with the
@@ -29,6 +30,14 @@
 // is certified element by element, each projected on its facet's plane,
 // without repair. An uncertified result is invalid.
 //
+// --bl-first adds a curved boundary layer of stretched tetrahedra on the wall
+// faces (thesis section 6.3.3, cad_boundary_layer.hpp): the linear mesh gets
+// the layer topology, is smoothed against the stretched ideal, elevated with
+// its wall nodes on the CAD faces and optimized. --bl-walls names the wall's
+// CAD faces (default: every face off the model's bounding box, the body in a
+// far-field box). Volume meshes only; the layer is certified (--certify)
+// without a repair stage.
+//
 // Exit status: 0 valid mesh written; 3 the result is invalid (nothing
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
 // options.
@@ -41,6 +50,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "cad_boundary_layer.hpp"
 #include "cad_command.hpp"
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
@@ -73,7 +83,35 @@ struct CurveCli {
   bool certify = false;
   int certify_depth = hom::cad::CurveOptions{}.certify_depth;
   int certify_rounds = hom::cad::CurveOptions{}.certify_rounds;
+  double bl_first = 0.0;  ///< > 0: insert a boundary layer
+  double bl_growth = 2.0, bl_extrusion = 0.1;
+  int bl_layers = 7;
+  std::string bl_walls;
+  bool bl_options_given = false;  ///< a --bl-* option other than --bl-first on the command line
 };
+
+/// Options of the default pipeline that the boundary-layer pipeline does not
+/// take (its measure is the shape measure, its optimizer the default one).
+void check_boundary_layer_options(const CurveCli& o) {
+  using hom::tools::UsageError;
+  try {
+    hom::BoundaryLayerOptions{
+        .first_height = o.bl_first, .growth = o.bl_growth, .layers = o.bl_layers, .extrusion_fraction = o.bl_extrusion}
+        .validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("curve: ") + e.what());
+  }
+  auto refuse = [](const std::string& what) {
+    throw UsageError("curve: " + what + " does not apply with --bl-first (the boundary-layer pipeline)");
+  };
+  if (o.surface) refuse("--surface");
+  if (o.quads) refuse("--quads");
+  if (o.measure != "shape") refuse("--measure " + o.measure);
+  if (o.solver != "auto") refuse("--solver " + o.solver);
+  if (o.pcont != "auto") refuse("--pcont " + o.pcont);
+  if (o.iterations_after_valid >= 0) refuse("--iterations-after-valid");
+  if (o.certify_rounds != hom::cad::CurveOptions{}.certify_rounds) refuse("--certify-rounds (there is no repair stage)");
+}
 
 void check_options(const CurveCli& o) {
   using hom::tools::UsageError;
@@ -106,6 +144,16 @@ void check_options(const CurveCli& o) {
   if (o.certify_rounds < 0) throw UsageError("curve: --certify-rounds must be >= 0");
   if (o.mesh.empty() == false && (o.size > 0 || o.size_curvature > 0))
     throw UsageError("curve: --size and --size-curvature apply to the built-in mesher, not to --mesh");
+  if (o.bl_first != 0.0) check_boundary_layer_options(o);
+  else if (o.bl_options_given) throw UsageError("curve: the --bl-* options need --bl-first H (the first layer's height)");
+}
+
+/// The boundary layer's settings; the walls checked against the model later.
+hom::tools::CadBoundaryLayerOptions boundary_layer_options(const CurveCli& o) {
+  hom::tools::CadBoundaryLayerOptions b;
+  b.layer = {.first_height = o.bl_first, .growth = o.bl_growth, .layers = o.bl_layers, .extrusion_fraction = o.bl_extrusion};
+  if (!o.bl_walls.empty()) b.walls = hom::tools::parse_tag_list("curve", "--bl-walls", o.bl_walls);
+  return b;
 }
 
 /// The shared pipeline's settings from the command line.
@@ -173,12 +221,22 @@ int run(int argc, char** argv) {
        "subdivision levels before an element is undecided (0..20)")  //
       ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
        "repair rounds at most (0: certify only)")  //
+      ("bl-first", po::value(&o.bl_first)->default_value(0.0),
+       "insert a boundary layer: height of its first layer (0: none)")  //
+      ("bl-growth", po::value(&o.bl_growth)->default_value(2.0), "boundary layer: ratio of consecutive heights (>= 1)")  //
+      ("bl-layers", po::value(&o.bl_layers)->default_value(7), "boundary layer: number of layers")  //
+      ("bl-walls", po::value(&o.bl_walls),
+       "boundary layer: the wall's CAD face tags, comma-separated (default: every face off the bounding box)")  //
+      ("bl-extrusion", po::value(&o.bl_extrusion)->default_value(0.1),
+       "boundary layer: the inserted topology is extruded by this fraction of the total height")  //
       ("vtu", po::value(&o.vtu), "write the curved mesh colored by quality (ParaView)")              //
       ("json", po::value(&o.json), "write the statistics of every stage as JSON")                    //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per optimizer iteration (stderr)");
   po::variables_map vm;
   if (!hom::tools::parse_options("curve", argc, argv, opts, {{"model", po::value(&o.model)}}, vm)) return 0;
   o.p_given = vm.count("p") && !vm["p"].defaulted();
+  for (const char* b : {"bl-growth", "bl-layers", "bl-walls", "bl-extrusion"})
+    o.bl_options_given = o.bl_options_given || (vm.count(b) && !vm[b].defaulted());
   check_options(o);
 
   hom::cad::CadModel cad =
@@ -213,7 +271,12 @@ int run(int argc, char** argv) {
           throw hom::tools::UsageError("curve: " + o.mesh + " is already curved (degree " +
                                        std::to_string(mesh.degree()) + "); --p " + std::to_string(o.p) +
                                        " cannot change it (leave --p out to optimize it on the model)");
+        if (o.bl_first > 0.0 && (M::dim != 3 || mesh.degree() > 1))
+          throw hom::tools::UsageError("curve: --bl-first needs a linear tetrahedral --mesh; " + o.mesh + " holds " +
+                                       std::string(F::name) + " of degree " + std::to_string(mesh.degree()));
         hom::tools::classify_user_mesh(mesh, cad, o.tolerance * cad.size());
+        if constexpr (M::dim == 3)
+          if (o.bl_first > 0.0) return hom::tools::boundary_layer_and_write(cad, mesh, boundary_layer_options(o), co);
         return hom::tools::curve_and_write(cad, mesh, co, elapsed());
       }
     });
@@ -221,8 +284,12 @@ int run(int argc, char** argv) {
   if (cad.num_solids() > 0 && !o.surface) {
     if (o.quads) throw hom::tools::UsageError("curve: volume meshes are tetrahedral; --quads needs --surface");
     const auto linear = hom::cad::mesh_cad<hom::Simplex<3>>(cad, mo);
+    if (o.bl_first > 0.0) return hom::tools::boundary_layer_and_write(cad, linear, boundary_layer_options(o), co);
     return hom::tools::curve_and_write(cad, linear, co, elapsed());
   }
+  if (o.bl_first > 0.0)
+    throw hom::tools::UsageError("curve: --bl-first needs a model with solids (a tetrahedral mesh); " + cad.name() +
+                                 " has none (for a planar mesh use hom boundary-layer)");
   if (auto placed = hom::cad::place_in_xy_plane(cad)) {
     if (placed->moved) std::printf("planar model: moved rigidly into the plane z = 0\n");
     const auto& model = placed->model;

@@ -15,8 +15,11 @@
 
 #include <initializer_list>
 #include <iostream>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <boost/program_options.hpp>
 
@@ -57,6 +60,36 @@ inline bool parse_options(std::string_view command, int argc, char** argv,
     throw UsageError(std::string(command) + ": " + e.what());
   }
   return true;
+}
+
+/// A comma-separated list of numbers ("0.5,1,2"); UsageError
+/// ("COMMAND: OPTION: 'x' is not a number") for anything else.
+inline std::vector<double> parse_number_list(std::string_view command, std::string_view option, const std::string& s) {
+  std::vector<double> v;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw UsageError(std::string(command) + ": " + std::string(option) + ": '" + item + "' is not a number");
+    }
+  }
+  return v;
+}
+
+/// A comma-separated list of at least one integer tag ("3,7").
+inline std::vector<int> parse_tag_list(std::string_view command, std::string_view option, const std::string& s) {
+  std::vector<int> tags;
+  for (double x : parse_number_list(command, option, s)) {
+    if (x != double(int(x)))
+      throw UsageError(std::string(command) + ": " + std::string(option) + " takes integer tags");
+    tags.push_back(int(x));
+  }
+  if (tags.empty()) throw UsageError(std::string(command) + ": " + std::string(option) + " needs at least one tag");
+  return tags;
 }
 
 }  // namespace hom::tools

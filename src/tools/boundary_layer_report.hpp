@@ -1,0 +1,46 @@
+#pragma once
+/// @file boundary_layer_report.hpp
+/// How `hom boundary-layer` and `hom curve --bl-first` tell the stages of the
+/// boundary-layer pipeline (optimize/boundary_layer_pipeline.hpp): table
+/// 6.4's rows on stdout, and one JSON case per stage (DESIGN.md schema) with
+/// the layer's parameters and the ideal layer mesh's largest aspect ratio.
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "hom/io/report.hpp"
+#include "hom/optimize/boundary_layer_pipeline.hpp"
+
+namespace hom::tools {
+
+inline void print_boundary_layer_stages(const std::vector<BoundaryLayerStage>& stages) {
+  std::printf("  %-10s %2s %8s %8s %7s %7s %7s %8s %6s %5s %8s\n", "stage", "p", "#elems", "#nodes", "Min", "Max", "Mean",
+              "Std.Dev.", "#inv", "iter", "time[s]");
+  for (const auto& s : stages)
+    std::printf("  %-10s %2d %8d %8d %7.4f %7.4f %7.4f %8.4f %6d %5d %8.3f\n", s.name.c_str(), s.p, s.elements, s.nodes,
+                s.quality.min, s.quality.max, s.quality.mean, s.quality.std_dev, s.quality.inverted, s.iterations,
+                s.time_s);
+}
+
+/// One case per stage; `source` names the input (a mesh file or a model).
+template <int Dim>
+std::vector<io::Json> boundary_layer_cases(const std::string& source, const BoundaryLayerPipelineResult<Dim>& r,
+                                           const BoundaryLayerOptions& layer) {
+  std::vector<io::Json> cases;
+  for (const auto& s : r.stages) {
+    io::CaseHeader h{source, std::string(Simplex<Dim>::name), s.p, s.elements, s.nodes, s.name, "shape", s.ideal};
+    auto c = io::quality_case(h, s.quality, s.scaled_jacobian);
+    c.set("time_s", s.time_s)
+        .set("iterations", s.iterations)
+        .set("aspect_ratio", r.layer.max_aspect_ratio)
+        .set("layers", layer.layers)
+        .set("first_height", layer.first_height)
+        .set("growth", layer.growth);
+    if (!s.stop_reason.empty()) c.set("stop_reason", s.stop_reason).set("converged", s.converged);
+    cases.push_back(std::move(c));
+  }
+  return cases;
+}
+
+}  // namespace hom::tools
