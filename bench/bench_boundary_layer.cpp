@@ -52,7 +52,12 @@
 /// case and stage, DESIGN.md keys plus aspect_ratio = the ideal layer's
 /// largest element aspect ratio, layers, first_height, growth, "thesis"
 /// rows); with --vtu-dir, VTU files of the inserted, smoothed and final
-/// meshes colored by element quality.
+/// meshes colored by element quality. For the sphere and the wing, a planar
+/// cut through the final curved mesh (bench/mesh_cut.hpp; the sphere's
+/// centre plane and the wing's mid-span plane, both normal to z):
+/// OUT/cut_<case>.csv, drawn by bench/plot_boundary_layer.py as
+/// OUT/cut_<case>.png, the whole cut and the wall region (skipped with a
+/// message without /usr/bin/python3 + matplotlib, or with --no-plot).
 ///
 /// Claims checked (exit status 1 when one fails): the final sphere and wing
 /// meshes are valid; the stretching study is valid up to 1:10^6 at every
@@ -62,6 +67,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -78,6 +84,7 @@
 #include "cad_model.hpp"
 #include "cube_with_cavity.hpp"
 #include "harness.hpp"
+#include "mesh_cut.hpp"
 #include "hom/detail/surface_projection.hpp"
 #include "hom/geometry/circle.hpp"
 #include "hom/io/report.hpp"
@@ -87,6 +94,9 @@
 
 #ifndef HOM_VERSION
 #define HOM_VERSION "unknown"
+#endif
+#ifndef HOM_PLOT_SCRIPT
+#define HOM_PLOT_SCRIPT "bench/plot_boundary_layer.py"
 #endif
 
 namespace po = boost::program_options;
@@ -238,7 +248,16 @@ struct Settings {
   int iterations_after_valid = 3;
   int max_iterations = 200;
   bool verbose = false;
+  bool plot = true;
+  fs::path plot_script = HOM_PLOT_SCRIPT;
 };
+
+/// A string as one argument of a /bin/sh command line.
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
 
 /// What one pipeline run is and gives, for the tables and the report.
 struct RunInfo {
@@ -358,6 +377,48 @@ class Runner {
     one("optimized_p" + std::to_string(r.mesh.degree()), r.mesh, r.smoothed.straight_sided_ideal());
   }
 
+  /// OUT/cut_<name>.csv: the cut of a case's final mesh by `plane`, with the
+  /// element quality of the table's last stage (`ideal` is what that stage
+  /// measures against).
+  void write_cut(const std::string& name, const hom::Mesh<hom::Simplex<3>>& m, const hom::IdealMesh<hom::Simplex<3>>& ideal,
+                 const std::vector<std::optional<int>>& level, const hom::bench::CutPlane& plane) {
+    const auto q = hom::mesh_quality(m, hom::ShapeMeasure{}, ideal,
+                                     hom::quadrature_for<hom::Simplex<3>, hom::DefaultExactness>(m.degree()));
+    // 2p sub-intervals per edge: the piecewise-linear cut then sits within a
+    // small fraction of the curving from the true one.
+    const auto polygons = hom::bench::cut_mesh(m, plane, std::max(2, 2 * m.degree()));
+    fs::create_directories(s_.out);
+    const fs::path path = s_.out / ("cut_" + name + ".csv");
+    hom::bench::write_cut_csv(path.string(), polygons, q, level);
+    std::printf("   cut: %zu polygons -> %s\n", polygons.size(), path.string().c_str());
+    cuts_.push_back(name);
+  }
+
+  /// Draws the cuts written so far (cut_<case>.png beside the CSVs). A
+  /// missing Python, matplotlib or script only skips the figures: the harness
+  /// reproduces tables, the figures are a convenience.
+  void plot_cuts() const {
+    if (!s_.plot || cuts_.empty()) return;
+    const std::string python = "/usr/bin/python3";
+    if (!fs::exists(python)) {
+      std::printf("plot: %s not found; skipping the PNG figures\n", python.c_str());
+      return;
+    }
+    if (std::system((python + " -c 'import matplotlib, numpy' >/dev/null 2>&1").c_str()) != 0) {
+      std::printf("plot: matplotlib or numpy is not available to %s; skipping the PNG figures\n", python.c_str());
+      return;
+    }
+    if (!fs::exists(s_.plot_script)) {
+      std::printf("plot: script %s not found; skipping the PNG figures\n", s_.plot_script.string().c_str());
+      return;
+    }
+    std::string cmd = python + " " + shell_quote(s_.plot_script.string()) + " " + shell_quote(s_.out.string());
+    for (const auto& c : cuts_) cmd += " " + shell_quote(c);
+    std::printf("plot: %s\n", cmd.c_str());
+    std::fflush(stdout);
+    if (std::system(cmd.c_str()) != 0) std::printf("plot: the plotting script failed (the CSV files are complete)\n");
+  }
+
   int finish(const std::string& csv, const std::string& json) {
     fs::create_directories(s_.out);
     const std::string cpath = csv.empty() ? (s_.out / "boundary_layer.csv").string() : csv;
@@ -378,6 +439,7 @@ class Runner {
   hom::bench::Checks checks_;
   std::ostringstream csv_;
   std::vector<hom::io::Json> cases_;
+  std::vector<std::string> cuts_;  ///< cases whose cut CSV was written
 };
 
 /// Largest distance of the final mesh's wall-facet nodes to `surface`
@@ -434,6 +496,7 @@ void run_sphere(Runner& run, int p, bool analytic_wall) {
   run.report(info, r);
   std::printf("   final wall nodes: max | |x - c| - r | = %.2e\n", info.wall_distance);
   run.write_vtu("sphere", r);
+  run.write_cut("sphere", r.mesh, r.smoothed.straight_sided_ideal(), r.layer.level, hom::bench::CutPlane::normal_z(cav.center));
   run.checks().expect(r.valid, "sphere p = " + std::to_string(p) + ": final boundary-layer mesh valid (0 inverted)");
 }
 
@@ -489,6 +552,7 @@ void run_wing(Runner& run, int p, const std::string& airfoil) {
   RunInfo info{"wing", "tetrahedron", "6.5", "extruded B-spline faces of the BREP", {}, 0, 0, &thesis_6_5};
   info.layer = {.first_height = 2e-4, .growth = 2.0, .layers = 7};
   const auto geometry = cad.geometry_model();
+  const auto mid_span = hom::bench::CutPlane::normal_z(Eigen::Vector3d(0.0, 0.0, 0.5 * ao.span));
   auto finish = [&](const hom::BoundaryLayerPipelineResult<3>& r) {
     info.aspect_ratio = r.layer.max_aspect_ratio;
     std::printf("   layers %d, first height %g, growth %g, H %g, %d wall facets, max aspect ratio %.3g, total %.1f s\n",
@@ -507,6 +571,8 @@ void run_wing(Runner& run, int p, const std::string& airfoil) {
     probe.stages.resize(3);
     probe.valid = false;
     finish(probe);
+    // The table ends at the smoothed linear mesh: cut that one, with its quality.
+    run.write_cut("wing", probe.smoothed, probe.layer.ideal, probe.layer.level, mid_span);
     std::printf("   the smoothed linear mesh has %d inverted elements: stages (d) and (e) at p = %d not run\n",
                 probe.stages[2].quality.inverted, p);
     run.checks().expect(false, "wing p = " + std::to_string(p) + ": final boundary-layer mesh valid (0 inverted)");
@@ -517,6 +583,7 @@ void run_wing(Runner& run, int p, const std::string& airfoil) {
     return (hom::detail::project_to_nearest_wall<3>(geometry, walls, x) - x).norm();
   });
   finish(r);
+  run.write_cut("wing", r.mesh, r.smoothed.straight_sided_ideal(), r.layer.level, mid_span);
   std::printf("   final wall nodes: max distance to the wall faces %.2e\n", info.wall_distance);
   run.checks().expect(r.valid, "wing p = " + std::to_string(p) + ": final boundary-layer mesh valid (0 inverted)");
 }
@@ -636,7 +703,9 @@ int main(int argc, char** argv) {
       ("iterations-after-valid", po::value(&s.iterations_after_valid)->default_value(3),
        "high-order stage: stop once valid this many iterations (-1: optimize to convergence)")  //
       ("max-iterations", po::value(&s.max_iterations)->default_value(200), "per optimizer stage")  //
-      ("verbose,v", po::bool_switch(&s.verbose), "optimizer progress on stderr");
+      ("verbose,v", po::bool_switch(&s.verbose), "optimizer progress on stderr")  //
+      ("no-plot", "do not draw the cut figures (the cut CSVs are still written)")  //
+      ("plot-script", po::value<std::string>()->default_value(s.plot_script.string()), "path of plot_boundary_layer.py");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -646,6 +715,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     s.out = vm["out"].as<std::string>();
+    s.plot = !vm.count("no-plot");
+    s.plot_script = vm["plot-script"].as<std::string>();
     if (s.quick && vm["p"].defaulted()) p = 2;
     if (s.quick && vm["airfoil"].defaulted()) airfoil = "naca0012";
     if (sphere_wall != "nurbs" && sphere_wall != "analytic") throw std::invalid_argument("--sphere-wall: nurbs or analytic");
@@ -673,6 +744,7 @@ int main(int argc, char** argv) {
   if (selected("wing")) guarded("wing", [&] { run_wing(run, p, airfoil); });
   if (selected("stretching"))
     guarded("stretching", [&] { run_stretching(run, p == 2 ? std::vector<int>{2} : std::vector<int>{2, p}); });
+  run.plot_cuts();
   std::printf("\ntotal %.1f s, peak memory %.0f MB\n", hom::bench::seconds_since(start), hom::bench::peak_rss_mb());
   return run.finish(csv, json);
 }

@@ -260,6 +260,7 @@ TEST_CASE("NURBS sphere: 8 exact rational patches, one closed solid") {
   const auto m = cad::nurbs_sphere_model(c, r);
   CHECK(m.num_solids() == 1);
   CHECK(m.num_shells() == 1);
+  CHECK(m.inner_shell_faces().empty());  // a solid ball has no cavity
   CHECK(m.num_faces() == 8);
   CHECK(m.surface_types().at("bspline") == 8);
   CHECK(m.valid());
@@ -308,6 +309,8 @@ TEST_CASE("cube with a spherical cavity built with OpenCASCADE") {
   for (int e = 1; e <= m.num_edges(); ++e) curves += !m.degenerated(e);
   CHECK(int(g.curves().size()) == curves);
   CHECK(m.summary().find("1 solid, 2 shells, 7 faces") != std::string::npos);  // the cavity is a shell
+  // The cavity's shell is the inner one: its sphere is the only inner-shell face.
+  CHECK(m.inner_shell_faces() == std::vector<int>{sphere});
   // Every edge's ends are its vertices; pcurves land on the same points.
   for (int e = 1; e <= m.num_edges(); ++e) {
     if (m.degenerated(e)) continue;

@@ -9,12 +9,14 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
 
 #include <BRepAlgoAPI_Cut.hxx>
 #include <BRepBndLib.hxx>
+#include <BRepClass3d.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeSolid.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>
@@ -401,6 +403,20 @@ std::vector<int> CadModel::solid_faces(int tag) const {
   TopExp::MapShapes(data_->solids(check_tag(data_->solids, tag, "solid")), TopAbs_FACE, m);
   for (int i = 1; i <= m.Extent(); ++i) out.push_back(data_->faces.FindIndex(m(i)));
   return out;
+}
+
+std::vector<int> CadModel::inner_shell_faces() const {
+  std::set<int> out;
+  for (int s = 1; s <= data_->solids.Extent(); ++s) {
+    const TopoDS_Solid solid = TopoDS::Solid(data_->solids(s));
+    const TopoDS_Shell outer = BRepClass3d::OuterShell(solid);
+    for (TopExp_Explorer shells(solid, TopAbs_SHELL); shells.More(); shells.Next()) {
+      if (shells.Current().IsSame(outer)) continue;
+      for (TopExp_Explorer f(shells.Current(), TopAbs_FACE); f.More(); f.Next())
+        out.insert(data_->faces.FindIndex(f.Current()));
+    }
+  }
+  return {out.begin(), out.end()};
 }
 
 std::vector<int> CadModel::edge_faces(int tag) const {

@@ -122,6 +122,9 @@ class CadModel {
   std::vector<int> face_edges(int face_tag) const;
   std::array<int, 2> edge_vertices(int edge_tag) const;
   std::vector<int> solid_faces(int solid_tag) const;
+  /// Faces of the solids' inner shells (the walls of cavities: a body inside
+  /// a far-field domain), sorted; empty when no solid has a cavity.
+  std::vector<int> inner_shell_faces() const;
   std::vector<int> edge_faces(int edge_tag) const;
   /// The (u, v) on face `face_tag` of the point of edge `edge_tag` at its
   /// parameter t (through the edge's pcurve on the face; for a seam edge the

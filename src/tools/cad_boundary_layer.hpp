@@ -31,7 +31,7 @@ namespace hom::tools {
 
 struct CadBoundaryLayerOptions {
   BoundaryLayerOptions layer;
-  std::vector<int> walls;  ///< CAD face tags; empty: every face off the model's bounding box
+  std::vector<int> walls;  ///< CAD face tags; empty: default_walls()
   int max_iterations = 200;
 };
 
@@ -52,15 +52,23 @@ inline std::vector<int> faces_off_bounding_box(const cad::CadModel& cad) {
   return faces;
 }
 
+/// The default wall of an external flow, a body inside a far-field domain:
+/// the faces of the solids' cavities (inner shells) or, for a model whose
+/// body is cut into the outer shell (a wing section spanning a box), the
+/// faces off the bounding box.
+inline std::vector<int> default_walls(const cad::CadModel& cad) {
+  auto faces = cad.inner_shell_faces();
+  if (faces.empty()) faces = faces_off_bounding_box(cad);
+  if (faces.empty())
+    throw UsageError("curve: " + cad.name() +
+                     " has no cavity and every face lies on its bounding box, so there is no default wall: name it "
+                     "with --bl-walls");
+  return faces;
+}
+
 /// The wall faces: the given tags, checked, or the default.
 inline std::vector<int> wall_faces(const cad::CadModel& cad, const std::vector<int>& given) {
-  if (given.empty()) {
-    auto faces = faces_off_bounding_box(cad);
-    if (faces.empty())
-      throw UsageError("curve: every face of " + cad.name() +
-                       " lies on its bounding box, so there is no default wall: name it with --bl-walls");
-    return faces;
-  }
+  if (given.empty()) return default_walls(cad);
   std::set<int> faces;
   for (int f : given) {
     if (f < 1 || f > cad.num_faces())

@@ -34,9 +34,9 @@
 // faces (thesis section 6.3.3, cad_boundary_layer.hpp): the linear mesh gets
 // the layer topology, is smoothed against the stretched ideal, elevated with
 // its wall nodes on the CAD faces and optimized. --bl-walls names the wall's
-// CAD faces (default: every face off the model's bounding box, the body in a
-// far-field box). Volume meshes only; the layer is certified (--certify)
-// without a repair stage.
+// CAD faces (default: the faces of the solids' cavities, else every face off
+// the model's bounding box: the body in a far-field domain). Volume meshes
+// only; the layer is certified (--certify) without a repair stage.
 //
 // Exit status: 0 valid mesh written; 3 the result is invalid (nothing
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
@@ -226,7 +226,8 @@ int run(int argc, char** argv) {
       ("bl-growth", po::value(&o.bl_growth)->default_value(2.0), "boundary layer: ratio of consecutive heights (>= 1)")  //
       ("bl-layers", po::value(&o.bl_layers)->default_value(7), "boundary layer: number of layers")  //
       ("bl-walls", po::value(&o.bl_walls),
-       "boundary layer: the wall's CAD face tags, comma-separated (default: every face off the bounding box)")  //
+       "boundary layer: the wall's CAD face tags, comma-separated (default: the cavities' faces, else the faces "
+       "off the bounding box)")  //
       ("bl-extrusion", po::value(&o.bl_extrusion)->default_value(0.1),
        "boundary layer: the inserted topology is extruded by this fraction of the total height")  //
       ("vtu", po::value(&o.vtu), "write the curved mesh colored by quality (ParaView)")              //
