@@ -689,6 +689,10 @@ FIGURES = [
     ("surface_appendixF", "appendixF_paraboloid_triangle.png", "Figure F.3: hyperbolic paraboloid, triangle"),
     ("surface_appendixF", "appendixF_paraboloid_quadrilateral.png", "Figure F.4: hyperbolic paraboloid, quadrilateral"),
     ("surface", "table52.png", "Figure 5.8: meshes of table 5.2"),
+    ("boundary_layer", "cut_sphere.png",
+     "Figure 6.9 analogue: cut through the curved boundary layer around the sphere (table 6.4), whole and at the wall"),
+    ("boundary_layer", "cut_wing.png",
+     "Figure 6.11 analogue: cut through the wing section's boundary layer (table 6.5), whole and at the leading edge"),
 ]
 
 
