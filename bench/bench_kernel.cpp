@@ -26,6 +26,11 @@
 // rate Eigen's GEMM reaches on the same shapes; at p = 2 the per-point measure work and the
 // gathers dominate.
 //
+// Re-measured 2026-11-23 on an IDLE 2-core AMD EPYC guest (load 0.01; README, "the element kernels
+// against the machine's peak"): AVX2 peak 49 GFLOP/s (512-bit via target attribute 102); tet
+// value_gradient p = 2 / 5 / 10: 9.6 / 9.6 / 13.1 GFLOP/s (19% / 19% / 26%), Hessian-vector
+// 12.4 / 11.6 / 16.8, dense products alone 35.5 / 49.0 / 46.1.
+//
 // Two groups of benchmarks:
 //   1. fma_peak: the peak double-precision rate of this build's widest SIMD ISA
 //      (AVX-512F, AVX2+FMA, SSE2, or scalar, from the compiler's __AVX512F__ /
