@@ -86,9 +86,9 @@ done
 
 # 5. A boundary layer on the cavity: 2 layers from 0.01, growing by 2, p = 2.
 bl="$work/bl.msh"
-log=$("$hom" curve --p 2 --bl-first 0.01 --bl-layers 2 -o "$bl" --json "$work/bl.json" --threads 1 --certify 2>&1); rc=$?
+log=$("$hom" curve --p 2 --bl-first 0.01 --bl-layers 2 -o "$bl" --vtu "$work/bl.vtu" --json "$work/bl.json" --threads 1 --certify 2>&1); rc=$?
 echo "$log" | sed 's/^/  [layer] /'
-[[ $rc -eq 0 && -s "$bl" ]] || fail "boundary layer: exit $rc or no mesh written"
+[[ $rc -eq 0 && -s "$bl" && -s "$work/bl.vtu" ]] || fail "boundary layer: exit $rc or no mesh or VTU written"
 grep -q "wall faces: [0-9]" <<<"$log" || fail "boundary layer: the wall faces are not named"
 "$py" - "$work/bl.json" <<'PY' || fail "boundary layer: JSON stages wrong"
 import json, sys

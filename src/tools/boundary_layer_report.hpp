@@ -11,6 +11,7 @@
 
 #include "hom/io/report.hpp"
 #include "hom/optimize/boundary_layer_pipeline.hpp"
+#include "mesh_io.hpp"
 
 namespace hom::tools {
 
@@ -21,6 +22,21 @@ inline void print_boundary_layer_stages(const std::vector<BoundaryLayerStage>& s
     std::printf("  %-10s %2d %8d %8d %7.4f %7.4f %7.4f %8.4f %6d %5d %8.3f\n", s.name.c_str(), s.p, s.elements, s.nodes,
                 s.quality.min, s.quality.max, s.quality.mean, s.quality.std_dev, s.quality.inverted, s.iterations,
                 s.time_s);
+}
+
+/// The result for ParaView: each element's quality against the smoothed
+/// linear mesh (the last stage's ideal) and its layer level (-1 outside).
+template <int Dim>
+void write_boundary_layer_vtu(const std::string& path, const BoundaryLayerPipelineResult<Dim>& r) {
+  const auto q = mesh_quality(r.mesh, ShapeMeasure{}, r.smoothed.straight_sided_ideal(),
+                              quadrature_for<Simplex<Dim>, DefaultExactness>(r.mesh.degree()));
+  std::vector<double> layer_level(r.mesh.num_elements(), -1.0);
+  for (int e = 0; e < r.mesh.num_elements(); ++e)
+    if (r.layer.level[e]) layer_level[e] = *r.layer.level[e];
+  io::VtuOptions vo;
+  vo.interpolate_point_data = false;
+  io::write_vtu(path, r.mesh, {node_kind_field(r.mesh)}, {{"quality", 1, q.qualities()}, {"layer_level", 1, layer_level}},
+                vo);
 }
 
 /// One case per stage; `source` names the input (a mesh file or a model).

@@ -161,15 +161,7 @@ inline int boundary_layer_and_write(const cad::CadModel& cad, const Mesh<Simplex
     io::write_msh(o.out, r.mesh, {});
     std::printf("wrote %s\n", o.out.c_str());
     if (!o.vtu.empty()) {
-      std::vector<double> layer_level(r.mesh.num_elements(), -1.0);
-      for (int e = 0; e < r.mesh.num_elements(); ++e)
-        if (r.layer.level[e]) layer_level[e] = *r.layer.level[e];
-      const auto q = mesh_quality(r.mesh, ShapeMeasure{}, r.smoothed.straight_sided_ideal(),
-                                  quadrature_for<Simplex<3>, DefaultExactness>(r.mesh.degree()));
-      io::VtuOptions vo;
-      vo.interpolate_point_data = false;
-      io::write_vtu(o.vtu, r.mesh, {node_kind_field(r.mesh)},
-                    {{"quality", 1, q.qualities()}, {"layer_level", 1, layer_level}}, vo);
+      write_boundary_layer_vtu(o.vtu, r);
       std::printf("wrote %s\n", o.vtu.c_str());
     }
   }

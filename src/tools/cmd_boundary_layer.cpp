@@ -133,15 +133,7 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
   hom::io::write_msh(o.out, r.mesh, {});
   std::printf("wrote %s\n", o.out.c_str());
   if (!o.vtu.empty()) {
-    const auto q = hom::mesh_quality(r.mesh, hom::ShapeMeasure{}, r.smoothed.straight_sided_ideal(),
-                                     hom::quadrature_for<hom::Simplex<D>, hom::DefaultExactness>(r.mesh.degree()));
-    std::vector<double> layer_level(r.mesh.num_elements(), -1.0);
-    for (int e = 0; e < r.mesh.num_elements(); ++e)
-      if (r.layer.level[e]) layer_level[e] = *r.layer.level[e];
-    hom::io::VtuOptions vo;
-    vo.interpolate_point_data = false;
-    hom::io::write_vtu(o.vtu, r.mesh, {hom::tools::node_kind_field(r.mesh)},
-                       {{"quality", 1, q.qualities()}, {"layer_level", 1, layer_level}}, vo);
+    hom::tools::write_boundary_layer_vtu(o.vtu, r);
     std::printf("wrote %s\n", o.vtu.c_str());
   }
   if (!o.json.empty()) {
