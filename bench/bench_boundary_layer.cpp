@@ -18,15 +18,14 @@
 ///               a box (src/meshing/airfoil_section, written as BREP, read and
 ///               meshed by src/cad so the wall is the model's own extruded
 ///               B-spline faces), 7 layers growing by 2 as the thesis's,
-///               p = 4; beside table 6.5. The linear stages run first (the
-///               pipeline at p = 1): when the smoothed linear mesh is still
-///               tangled the degree-p stages are not run (they cannot end
-///               valid) and the claim fails. SD7003's trailing edge is a
-///               4-degree wedge: the layer nodes of its stack on the wall
-///               border (held at the planes z = 0 and z = span) sit along
-///               the bisector, only ~0.04 H_k above either surface, and the
-///               thin levels there stay inverted (8 elements at the two
-///               border ends in our measurements);
+///               p = 4; beside table 6.5. When the smoothed linear mesh is
+///               still tangled the pipeline stops there (the degree-p
+///               stages cannot end valid) and the claim fails. SD7003's
+///               trailing edge is a 4-degree wedge: the layer nodes of its
+///               stack on the wall border (held at the planes z = 0 and
+///               z = span) sit along the bisector, only ~0.04 H_k above
+///               either surface, and the thin levels there stay inverted
+///               (8 elements at the two border ends in our measurements);
 ///   stretching  first-layer heights giving aspect ratios about 1:10^2,
 ///               1:10^4, 1:10^6 and 1:10^8 on a 2D quarter annulus (inner
 ///               circle of diameter 1 as the wall, Circle<2>), p = 2 and 4:
@@ -84,6 +83,7 @@
 #include "cad_model.hpp"
 #include "cube_with_cavity.hpp"
 #include "harness.hpp"
+#include "plot_script.hpp"
 #include "mesh_cut.hpp"
 #include "hom/detail/surface_projection.hpp"
 #include "hom/geometry/circle.hpp"
@@ -252,13 +252,6 @@ struct Settings {
   fs::path plot_script = HOM_PLOT_SCRIPT;
 };
 
-/// A string as one argument of a /bin/sh command line.
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
 /// What one pipeline run is and gives, for the tables and the report.
 struct RunInfo {
   std::string name, family, table, wall;
@@ -374,7 +367,7 @@ class Runner {
     };
     one("inserted", r.layer.mesh, r.layer.ideal);
     one("smoothed", r.smoothed, r.layer.ideal);
-    one("optimized_p" + std::to_string(r.mesh.degree()), r.mesh, r.smoothed.straight_sided_ideal());
+    if (!r.stopped_after_smoothing) one("optimized_p" + std::to_string(r.mesh.degree()), r.mesh, r.final_ideal());
   }
 
   /// OUT/cut_<name>.csv: the cut of a case's final mesh by `plane`, with the
@@ -398,25 +391,7 @@ class Runner {
   /// missing Python, matplotlib or script only skips the figures: the harness
   /// reproduces tables, the figures are a convenience.
   void plot_cuts() const {
-    if (!s_.plot || cuts_.empty()) return;
-    const std::string python = "/usr/bin/python3";
-    if (!fs::exists(python)) {
-      std::printf("plot: %s not found; skipping the PNG figures\n", python.c_str());
-      return;
-    }
-    if (std::system((python + " -c 'import matplotlib, numpy' >/dev/null 2>&1").c_str()) != 0) {
-      std::printf("plot: matplotlib or numpy is not available to %s; skipping the PNG figures\n", python.c_str());
-      return;
-    }
-    if (!fs::exists(s_.plot_script)) {
-      std::printf("plot: script %s not found; skipping the PNG figures\n", s_.plot_script.string().c_str());
-      return;
-    }
-    std::string cmd = python + " " + shell_quote(s_.plot_script.string()) + " " + shell_quote(s_.out.string());
-    for (const auto& c : cuts_) cmd += " " + shell_quote(c);
-    std::printf("plot: %s\n", cmd.c_str());
-    std::fflush(stdout);
-    if (std::system(cmd.c_str()) != 0) std::printf("plot: the plotting script failed (the CSV files are complete)\n");
+    if (s_.plot && !cuts_.empty()) hom::bench::run_plot_script(s_.plot_script, s_.out, cuts_, "matplotlib, numpy");
   }
 
   int finish(const std::string& csv, const std::string& json) {
@@ -496,7 +471,7 @@ void run_sphere(Runner& run, int p, bool analytic_wall) {
   run.report(info, r);
   std::printf("   final wall nodes: max | |x - c| - r | = %.2e\n", info.wall_distance);
   run.write_vtu("sphere", r);
-  run.write_cut("sphere", r.mesh, r.smoothed.straight_sided_ideal(), r.layer.level, hom::bench::CutPlane::normal_z(cav.center));
+  run.write_cut("sphere", r.mesh, r.final_ideal(), r.layer.level, hom::bench::CutPlane::normal_z(cav.center));
   run.checks().expect(r.valid, "sphere p = " + std::to_string(p) + ": final boundary-layer mesh valid (0 inverted)");
 }
 
@@ -561,30 +536,20 @@ void run_wing(Runner& run, int p, const std::string& airfoil) {
     run.report(info, r);
     run.write_vtu("wing", r);
   };
-  // The linear stages first (the pipeline at p = 1, stage (e) cut short):
-  // when the smoothed linear mesh is still tangled, the degree-p stages
-  // cannot end valid and only cost time, so they are not run.
-  auto probe_options = run.pipeline_options(info.layer, 1);
-  probe_options.high_order_optimize.max_iterations = 1;
-  auto probe = hom::boundary_layer_pipeline<3>(mesh, walls, geometry, probe_options);
-  if (probe.stages[2].quality.inverted > 0) {
-    probe.stages.resize(3);
-    probe.valid = false;
-    finish(probe);
-    // The table ends at the smoothed linear mesh: cut that one, with its quality.
-    run.write_cut("wing", probe.smoothed, probe.layer.ideal, probe.layer.level, mid_span);
-    std::printf("   the smoothed linear mesh has %d inverted elements: stages (d) and (e) at p = %d not run\n",
-                probe.stages[2].quality.inverted, p);
-    run.checks().expect(false, "wing p = " + std::to_string(p) + ": final boundary-layer mesh valid (0 inverted)");
-    return;
-  }
+  // When the smoothed linear mesh is still tangled the pipeline stops there
+  // (stop_if_smoothed_invalid): the degree-p stages cannot end valid.
   const auto r = hom::boundary_layer_pipeline<3>(mesh, walls, geometry, run.pipeline_options(info.layer, p));
   info.wall_distance = wall_distance<3>(r.mesh, walls, [&](const Eigen::Vector3d& x) {
     return (hom::detail::project_to_nearest_wall<3>(geometry, walls, x) - x).norm();
   });
   finish(r);
-  run.write_cut("wing", r.mesh, r.smoothed.straight_sided_ideal(), r.layer.level, mid_span);
-  std::printf("   final wall nodes: max distance to the wall faces %.2e\n", info.wall_distance);
+  // The cut is of the table's last mesh, with its quality.
+  run.write_cut("wing", r.mesh, r.final_ideal(), r.layer.level, mid_span);
+  if (r.stopped_after_smoothing)
+    std::printf("   the smoothed linear mesh has %d inverted elements: stages (d) and (e) at p = %d not run\n",
+                r.stages.back().quality.inverted, p);
+  else
+    std::printf("   final wall nodes: max distance to the wall faces %.2e\n", info.wall_distance);
   run.checks().expect(r.valid, "wing p = " + std::to_string(p) + ": final boundary-layer mesh valid (0 inverted)");
 }
 
@@ -659,9 +624,12 @@ void run_stretching(Runner& run, const std::vector<int>& degrees) {
                   layer.first_height, layer.growth, p);
       run.report(info, r);
       run.write_vtu(info.name, r);
+      // Stopped at a tangled (c): no (d) and (e) (NaN, -1).
       const auto& st = r.stages;
-      rows.push_back({e, p, info.aspect_ratio, layer.first_height, layer.growth, st[2].quality.min, st[4].quality.min,
-                      st[3].quality.inverted, st[4].quality.inverted, st[2].iterations, st[4].iterations, r.time_s, r.valid});
+      const bool all = !r.stopped_after_smoothing;
+      rows.push_back({e, p, info.aspect_ratio, layer.first_height, layer.growth, st[2].quality.min,
+                      all ? st[4].quality.min : std::nan(""), all ? st[3].quality.inverted : -1,
+                      all ? st[4].quality.inverted : -1, st[2].iterations, all ? st[4].iterations : 0, r.time_s, r.valid});
       if (e <= 6)
         run.checks().expect(r.valid, "stretching 1:1e" + std::to_string(e) + " p = " + std::to_string(p) +
                                          ": final boundary-layer mesh valid (0 inverted)");

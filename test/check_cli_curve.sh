@@ -8,7 +8,8 @@
 # status, a message naming the file, and no output left behind. --bl-first
 # adds a boundary layer on the cavity (the default wall: the faces off the
 # bounding box): every stage reported, the result valid with its wall on the
-# CAD, and bad boundary-layer options refused.
+# CAD, bad boundary-layer options refused, and a layer too thick for the
+# domain stopped at its tangled linear stage with nothing written.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -109,4 +110,21 @@ for args in "--bl-first -1" "--bl-growth 3" "--bl-first 0.01 --bl-growth 0.5" "-
   [[ $rc -eq 2 ]] || fail "bad boundary-layer options '$args': exit $rc, expected 2: $err"
 done
 [[ ! -e "$work/blbad.msh" ]] || fail "bad boundary-layer options: output written"
+
+# 6. A layer on the cube's face 1 thicker than the cube (H = 14): the
+# layer's nodes on the face's border are held at their heights, outside the
+# domain, so the smoothed linear mesh stays tangled and the pipeline stops at
+# stage (c): exit 3, the reason, no mesh, and a report of three stages.
+log=$("$hom" curve --p 2 --bl-first 2 --bl-layers 3 --bl-walls 1 -o "$work/blthick.msh" --json "$work/blthick.json" \
+      --threads 1 2>&1); rc=$?
+echo "$log" | sed 's/^/  [thick layer] /'
+[[ $rc -eq 3 ]] || fail "thick layer: exit $rc, want 3"
+grep -q "stages (d) and (e) were not run" <<<"$log" || fail "thick layer: no reason given"
+[[ ! -e "$work/blthick.msh" ]] || fail "thick layer: an invalid mesh was written"
+"$py" - "$work/blthick.json" <<'PY' || fail "thick layer: JSON stages wrong"
+import json, sys
+cases = json.load(open(sys.argv[1]))["cases"]
+assert [c["stage"] for c in cases] == ["inviscid", "inserted", "smoothed"], cases
+assert cases[-1]["inverted"] > 0 and cases[-1]["valid"] is False and cases[-1]["output"] is None, cases[-1]
+PY
 echo "OK"

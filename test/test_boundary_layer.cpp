@@ -20,6 +20,7 @@
 #include "hom/geometry/circle.hpp"
 #include "hom/geometry/plane.hpp"
 #include "hom/optimize/boundary_layer_pipeline.hpp"
+#include "hom/quality/certify.hpp"
 #include "hom/mesh/structured.hpp"
 #include "hom/mesh/topology.hpp"
 
@@ -323,6 +324,7 @@ TEST_CASE("boundary layer pipeline: 2D quarter annulus, curved circular wall") {
   o.p = 3;
   const auto r = hom::boundary_layer_pipeline<2>(in, {wall}, g, o);
   check_pipeline<2>(r, in, o);
+  CHECK_FALSE(r.certification);  // no certify stage unless asked
   // Every node of the final wall lies on the circle.
   int on_wall = 0;
   for (const auto& f : r.mesh.boundary_facets())
@@ -353,4 +355,61 @@ TEST_CASE("boundary layer pipeline: 3D cube, flat wall") {
   check_pipeline<3>(r, in, o);
   // A flat wall: curving moves nothing, so (d) is (c) elevated, quality 1.
   CHECK(r.stages[3].quality.min == doctest::Approx(1.0));
+}
+
+TEST_CASE("boundary layer pipeline: a tangled smoothed linear mesh stops the pipeline at (c)") {
+  // H = 0.3 + 0.6 + 1.2 = 2.1, twice the annulus's thickness: the layer's
+  // nodes on the wall border are held at their heights outside the domain,
+  // so no smoothing can untangle (c).
+  const auto in = quarter_annulus(4, 8);
+  const int wall = side_tag<2>(0);
+  hom::GeometryModel<2> g;
+  g.add_curve(wall, hom::Circle<2>(Eigen::Vector2d::Zero(), 0.5));
+  hom::BoundaryLayerPipelineOptions o;
+  o.layer = {.first_height = 0.3, .growth = 2.0, .layers = 3};
+  o.p = 3;
+  o.linear_optimize.max_iterations = 20;
+  o.high_order_optimize.max_iterations = 5;
+  const auto r = hom::boundary_layer_pipeline<2>(in, {wall}, g, o);
+  REQUIRE(r.stages.size() == 3);
+  CHECK(r.stages.back().name == "smoothed");
+  CHECK(r.stages.back().quality.inverted > 0);
+  CHECK(r.stopped_after_smoothing);
+  CHECK_FALSE(r.valid);
+  // The result is the (c) mesh, and final_ideal() is what (c) was measured
+  // against: measuring again gives the same count.
+  CHECK(r.mesh.degree() == 1);
+  CHECK(r.mesh.nodes() == r.smoothed.nodes());
+  const auto q = hom::mesh_quality(r.mesh, hom::ShapeMeasure{}, r.final_ideal(),
+                                   hom::quadrature_for<hom::Simplex<2>, hom::DefaultExactness>(1));
+  CHECK(q.quality_statistics().inverted == r.stages.back().quality.inverted);
+
+  // With the stop off, (d) and (e) run on the same (c) and cannot end valid.
+  o.stop_if_smoothed_invalid = false;
+  const auto all = hom::boundary_layer_pipeline<2>(in, {wall}, g, o);
+  REQUIRE(all.stages.size() == 5);
+  CHECK_FALSE(all.stopped_after_smoothing);
+  CHECK(all.stages[2].quality.inverted == r.stages[2].quality.inverted);
+  CHECK(all.mesh.degree() == 3);
+  CHECK_FALSE(all.valid);
+}
+
+TEST_CASE("boundary layer pipeline: stage (e) certified and repaired on request") {
+  const auto in = quarter_annulus(4, 8);
+  const int wall = side_tag<2>(0);
+  hom::GeometryModel<2> g;
+  g.add_curve(wall, hom::Circle<2>(Eigen::Vector2d::Zero(), 0.5));
+  hom::BoundaryLayerPipelineOptions o;
+  o.layer = {.first_height = 0.01, .growth = 2.0, .layers = 3};
+  o.p = 4;
+  o.high_order_optimize.certify = true;
+  const auto r = hom::boundary_layer_pipeline<2>(in, {wall}, g, o);
+  check_pipeline<2>(r, in, o);
+  REQUIRE(r.certification);
+  CHECK(r.certification->certified());
+  CHECK(r.certification->valid == r.mesh.num_elements());
+  // An independent certificate of the result agrees.
+  const auto c = hom::certify_mesh(r.mesh, hom::CertifyOptions{});
+  CHECK(c.valid == r.mesh.num_elements());
+  CHECK(c.min_scaled_jacobian > 0.0);
 }

@@ -15,6 +15,16 @@
 
 namespace hom::tools {
 
+/// Why the degree-p stages were not run, for a result that stopped at (c).
+template <int Dim>
+std::string smoothed_tangled_message(const BoundaryLayerPipelineResult<Dim>& r) {
+  return "the linear mesh smoothed against the stretched ideal (stage c) still has " +
+         std::to_string(r.stages.back().quality.inverted) + " inverted elements after " +
+         std::to_string(r.stages.back().iterations) +
+         " iterations, so stages (d) and (e) were not run (they cannot end valid); the layer may be too thick for "
+         "the elements at the wall: try a smaller first height, growth or number of layers, or a finer mesh there";
+}
+
 inline void print_boundary_layer_stages(const std::vector<BoundaryLayerStage>& stages) {
   std::printf("  %-10s %2s %8s %8s %7s %7s %7s %8s %6s %5s %8s\n", "stage", "p", "#elems", "#nodes", "Min", "Max", "Mean",
               "Std.Dev.", "#inv", "iter", "time[s]");
@@ -24,11 +34,12 @@ inline void print_boundary_layer_stages(const std::vector<BoundaryLayerStage>& s
                 s.time_s);
 }
 
-/// The result for ParaView: each element's quality against the smoothed
-/// linear mesh (the last stage's ideal) and its layer level (-1 outside).
+/// The result for ParaView: each element's quality against the last stage's
+/// ideal (the smoothed linear mesh, or the stretched ideal when the pipeline
+/// stopped at a tangled stage (c)) and its layer level (-1 outside).
 template <int Dim>
 void write_boundary_layer_vtu(const std::string& path, const BoundaryLayerPipelineResult<Dim>& r) {
-  const auto q = mesh_quality(r.mesh, ShapeMeasure{}, r.smoothed.straight_sided_ideal(),
+  const auto q = mesh_quality(r.mesh, ShapeMeasure{}, r.final_ideal(),
                               quadrature_for<Simplex<Dim>, DefaultExactness>(r.mesh.degree()));
   std::vector<double> layer_level(r.mesh.num_elements(), -1.0);
   for (int e = 0; e < r.mesh.num_elements(); ++e)

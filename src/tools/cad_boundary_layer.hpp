@@ -8,7 +8,8 @@
 /// faces themselves (CadModel::geometry_model: OpenCASCADE surfaces, NURBS
 /// included) and optimized. As everywhere in `hom curve`, the result is
 /// checked before anything is written: no inverted element, every wall node
-/// on its CAD face and, with --certify, every element certified valid.
+/// on its CAD face and, with --certify, every element certified valid (after
+/// the certify-and-repair stage that then ends stage (e)).
 
 #include <algorithm>
 #include <cmath>
@@ -24,7 +25,6 @@
 #include "certification_report.hpp"
 #include "hom/optimize/boundary_layer_pipeline.hpp"
 #include "hom/optimize/certified.hpp"
-#include "hom/quality/certify.hpp"
 #include "mesh_io.hpp"
 
 namespace hom::tools {
@@ -107,6 +107,10 @@ inline int boundary_layer_and_write(const cad::CadModel& cad, const Mesh<Simplex
     s->max_iterations = bl.max_iterations;
     s->verbose = o.curve.verbose;
   }
+  // --certify: stage (e) ends with certify-and-repair (optimize/certified.hpp).
+  opt.high_order_optimize.certify = o.curve.certify;
+  opt.high_order_optimize.certify_depth = o.curve.certify_depth;
+  opt.high_order_optimize.certify_rounds = o.curve.certify_rounds;
   opt.progress = [](const std::string& stage) {
     std::printf("  stage %s done\n", stage.c_str());
     std::fflush(stdout);
@@ -125,18 +129,14 @@ inline int boundary_layer_and_write(const cad::CadModel& cad, const Mesh<Simplex
   const double distance = wall_distance(r.mesh, walls, cad);
   const double allowed = 1e-6 * cad.size();
   std::printf("wall on the CAD: largest distance of a wall node to its face %.3g\n", distance);
-  std::optional<CertificationOutcome> certification;
-  if (o.curve.certify) {
-    CertifyOptions co;
-    co.max_depth = o.curve.certify_depth;
-    co.threads = o.curve.threads;
-    certification = certification_outcome(certify_mesh(r.mesh, co).elements, RepairStop::not_repaired);
-    print_certification(*certification, co.max_depth);
-  }
+  const std::optional<CertificationOutcome>& certification = r.certification;
+  if (certification) print_certification(*certification, o.curve.certify_depth);
   const bool on_cad = distance <= allowed;
   const bool valid = r.valid && on_cad && (!certification || certification->certified());
   const char* cmd = o.command.c_str();
-  if (!r.valid)
+  if (r.stopped_after_smoothing)
+    std::fprintf(stderr, "hom: %s: INVALID result: %s; nothing written\n", cmd, smoothed_tangled_message(r).c_str());
+  else if (!r.valid)
     std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; nothing written\n", cmd,
                  r.stages.back().quality.inverted, r.mesh.num_elements());
   else if (!on_cad)
@@ -144,8 +144,8 @@ inline int boundary_layer_and_write(const cad::CadModel& cad, const Mesh<Simplex
                  cmd, distance, allowed);
   else if (!valid)
     std::fprintf(stderr,
-                 "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish between "
-                 "quadrature points; the boundary layer has no repair stage); nothing written\n",
+                 "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid after the repair rounds (det D "
+                 "phi_P may vanish between quadrature points); nothing written\n",
                  cmd, int(certification->uncertified.size()), r.mesh.num_elements());
   else
     std::printf("valid: no inverted element, every wall node on its CAD face%s\n",

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -29,6 +30,26 @@ struct CadCommandOptions {
   std::string out, vtu, json;
   cad::CurveOptions curve;  ///< p, measure, solver, p-continuation, threads, iterations
 };
+
+/// The options `hom curve` and `hom optimize --cad` take alike (outputs,
+/// measure, solver, threads, certification), from either command's parsed
+/// command line; each command adds its own (degree, p-continuation, limits).
+template <class Cli>
+CadCommandOptions shared_cad_command_options(std::string command, const Cli& o) {
+  CadCommandOptions c;
+  c.command = std::move(command);
+  c.out = o.out;
+  c.vtu = o.vtu;
+  c.json = o.json;
+  c.curve.measure = o.measure;
+  c.curve.solver = o.solver;
+  c.curve.threads = o.threads;
+  c.curve.verbose = o.verbose;
+  c.curve.certify = o.certify;
+  c.curve.certify_depth = o.certify_depth;
+  c.curve.certify_rounds = o.certify_rounds;
+  return c;
+}
 
 inline double peak_rss_mb() {
   rusage u{};

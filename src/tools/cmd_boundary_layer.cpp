@@ -1,6 +1,7 @@
 // hom boundary-layer IN.msh --walls TAGS --bl-first H [--bl-growth G] [--bl-layers N] [--p P] -o OUT.msh
 //                   [--wall-geometry sphere:cx,cy,cz,r | circle:cx,cy,r | plane | none]
 //                   [--extrusion F] [--threads N] [--max-iterations N] [--json FILE] [--vtu FILE] [-v]
+//                   [--certify [--certify-depth N] [--certify-rounds N]]
 //
 // Inserts a curved high-order boundary layer into a linear simplex mesh
 // (thesis section 6.3.3, include/hom/optimize/boundary_layer_pipeline.hpp):
@@ -15,7 +16,16 @@
 // entity tag. --wall-geometry: the wall's exact shape (plane and none leave
 // the wall as the facets make it).
 //
-// Exit status: 0 the result is valid, 3 some elements are inverted (outputs
+// --certify ends the last stage with hom optimize --certify's stage: every
+// element certified (Bernstein bounds of det D phi_P), folds between
+// quadrature points repaired with the wall held (optimize/certified.hpp).
+//
+// When the smoothed linear mesh (stage c) is still tangled, the degree-P
+// stages are not run (they cannot end valid): the output is that linear
+// mesh and the exit status 3.
+//
+// Exit status: 0 the result is valid (and, with --certify, certified), 3
+// some elements are inverted or not certified valid (outputs
 // are written anyway), 1 unreadable input or I/O error, 2 bad options or a
 // mesh that is not a linear simplex mesh. Outputs are written only at the end,
 // each atomically.
@@ -29,6 +39,7 @@
 #include <boost/program_options.hpp>
 
 #include "boundary_layer_report.hpp"
+#include "certification_report.hpp"
 #include "command.hpp"
 #include "hom/geometry/circle.hpp"
 #include "hom/geometry/sphere.hpp"
@@ -48,7 +59,9 @@ struct BoundaryLayerCli {
   std::string in, out, walls, geometry = "none", json, vtu;
   double first = 0.0, growth = 2.0, extrusion = 0.1;
   int layers = 7, p = 2, threads = 0, max_iterations = 200;
-  bool verbose = false;
+  bool verbose = false, certify = false;
+  int certify_depth = hom::CertifyOptions{}.max_depth;
+  int certify_rounds = hom::CertifyRepairOptions{}.max_rounds;
 };
 
 /// Entity tags of the walls: physical groups of dimension Dim - 1 first.
@@ -117,6 +130,9 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
     s->max_iterations = o.max_iterations;
     s->verbose = o.verbose;
   }
+  opt.high_order_optimize.certify = o.certify;
+  opt.high_order_optimize.certify_depth = o.certify_depth;
+  opt.high_order_optimize.certify_rounds = o.certify_rounds;
   if (o.verbose) opt.progress = [](const std::string& stage) { std::fprintf(stderr, "stage %s done\n", stage.c_str()); };
 
   std::printf("%s: %s mesh, %d elements, %d nodes; walls:", o.in.c_str(), D == 3 ? "tetrahedral" : "triangular",
@@ -128,19 +144,31 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
   const auto r = hom::boundary_layer_pipeline<D>(mesh, walls, geometry, opt);
   hom::tools::print_boundary_layer_stages(r.stages);
   std::printf("\nlargest aspect ratio of the ideal layer elements: %.4g\n", r.layer.max_aspect_ratio);
-  std::printf("%s\n", r.valid ? "valid at every quadrature point" : "INVALID: some elements have det <= 0 at a quadrature point");
+  if (r.stopped_after_smoothing)
+    std::printf("INVALID: %s\n", hom::tools::smoothed_tangled_message(r).c_str());
+  else
+    std::printf("%s\n", r.valid ? "valid at every quadrature point" : "INVALID: some elements have det <= 0 at a quadrature point");
+  if (r.certification) hom::tools::print_certification(*r.certification, o.certify_depth);
+  const bool certified = !o.certify || (r.certification && r.certification->certified());
+  if (r.valid && !certified)
+    std::printf("NOT CERTIFIED: %d of %d elements are not certified valid after the repair rounds\n",
+                int(r.certification->uncertified.size()), r.mesh.num_elements());
 
+  // An invalid result is written too (exit 3), as by `hom optimize`, to be
+  // looked at: when stopped at (c), the tangled linear mesh.
   hom::io::write_msh(o.out, r.mesh, {});
-  std::printf("wrote %s\n", o.out.c_str());
+  std::printf("wrote %s%s\n", o.out.c_str(), r.stopped_after_smoothing ? " (the tangled linear mesh of stage c, p = 1)" : "");
   if (!o.vtu.empty()) {
     hom::tools::write_boundary_layer_vtu(o.vtu, r);
     std::printf("wrote %s\n", o.vtu.c_str());
   }
   if (!o.json.empty()) {
-    hom::io::write_report(o.json, "hom boundary-layer", HOM_VERSION, hom::tools::boundary_layer_cases(o.in, r, opt.layer));
+    auto cases = hom::tools::boundary_layer_cases(o.in, r, opt.layer);
+    if (r.certification) hom::tools::add_certification(cases.back(), *r.certification, o.certify_depth);
+    hom::io::write_report(o.json, "hom boundary-layer", HOM_VERSION, std::move(cases));
     std::printf("wrote %s\n", o.json.c_str());
   }
-  return r.valid ? 0 : 3;
+  return r.valid && certified ? 0 : 3;
 }
 
 void check_options(const BoundaryLayerCli& o) {
@@ -159,6 +187,9 @@ void check_options(const BoundaryLayerCli& o) {
   if (o.p < 1 || o.p > 10) throw UsageError("boundary-layer: --p must be in 1..10, got " + std::to_string(o.p));
   if (o.threads < 0) throw UsageError("boundary-layer: --threads must be >= 0 (0: OpenMP's default)");
   if (o.max_iterations < 1) throw UsageError("boundary-layer: --max-iterations must be >= 1");
+  if (o.certify_depth < 0 || o.certify_depth > 20)
+    throw UsageError("boundary-layer: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
+  if (o.certify_rounds < 0) throw UsageError("boundary-layer: --certify-rounds must be >= 0");
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu"))
     throw UsageError("boundary-layer: --vtu file name must end in .vtu");
   if (o.vtu == o.out || (!o.json.empty() && (o.json == o.out || o.json == o.vtu)))
@@ -172,9 +203,10 @@ int run(int argc, char** argv) {
       "Insert a curved high-order boundary layer into a linear tetrahedral (or planar triangular)\n"
       "mesh (thesis section 6.3.3): split the wall, insert layers of stretched simplices, smooth\n"
       "the linear mesh against the stretched ideal, elevate to degree P with the wall on its\n"
-      "geometry, and optimize. Prints every stage's quality statistics (table 6.4).\n"
-      "Exit status: 0 the result is valid, 3 some elements are inverted (outputs are written\n"
-      "anyway), 1 unreadable input, 2 bad options.\n\noptions");
+      "geometry, and optimize. Prints every stage's quality statistics (table 6.4). When the\n"
+      "smoothed linear mesh is still tangled, stops there and writes it (exit 3).\n"
+      "Exit status: 0 the result is valid (with --certify: certified), 3 some elements are\n"
+      "inverted or not certified (outputs are written anyway), 1 unreadable input, 2 bad options.\n\noptions");
   opts.add_options()("help,h", "show this help")                                                       //
       ("output,o", po::value(&o.out), "result (.msh, degree P)")                                       //
       ("walls", po::value(&o.walls), "wall tags, comma-separated: physical groups (else entities) of the boundary")  //
@@ -190,6 +222,13 @@ int run(int argc, char** argv) {
       ("max-iterations", po::value(&o.max_iterations)->default_value(200), "iteration limit per optimization")  //
       ("json", po::value(&o.json), "write every stage's statistics as JSON")                   //
       ("vtu", po::value(&o.vtu), "write the result colored by quality and layer level (ParaView)")  //
+      ("certify", po::bool_switch(&o.certify),
+       "certify the sign of det everywhere in each element of the result (Bernstein bounds) and repair "
+       "folds between quadrature points")  //
+      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
+       "subdivision depth of the certification")  //
+      ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
+       "repair rounds at most (0: certify only)")  //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per iteration (stderr)");
   po::variables_map vm;
   if (!hom::tools::parse_options("boundary-layer", argc, argv, opts, {{"input", po::value(&o.in)}}, vm)) return 0;

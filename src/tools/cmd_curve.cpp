@@ -36,7 +36,9 @@
 // its wall nodes on the CAD faces and optimized. --bl-walls names the wall's
 // CAD faces (default: the faces of the solids' cavities, else every face off
 // the model's bounding box: the body in a far-field domain). Volume meshes
-// only; the layer is certified (--certify) without a repair stage.
+// only; with --certify the layer mesh is certified and its folds between
+// quadrature points repaired, the wall held. A smoothed linear mesh that is
+// still tangled stops the pipeline there (exit 3).
 //
 // Exit status: 0 valid mesh written; 3 the result is invalid (nothing
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
@@ -110,7 +112,6 @@ void check_boundary_layer_options(const CurveCli& o) {
   if (o.solver != "auto") refuse("--solver " + o.solver);
   if (o.pcont != "auto") refuse("--pcont " + o.pcont);
   if (o.iterations_after_valid >= 0) refuse("--iterations-after-valid");
-  if (o.certify_rounds != hom::cad::CurveOptions{}.certify_rounds) refuse("--certify-rounds (there is no repair stage)");
 }
 
 void check_options(const CurveCli& o) {
@@ -158,23 +159,12 @@ hom::tools::CadBoundaryLayerOptions boundary_layer_options(const CurveCli& o) {
 
 /// The shared pipeline's settings from the command line.
 hom::tools::CadCommandOptions cad_command_options(const CurveCli& o) {
-  hom::tools::CadCommandOptions c;
-  c.command = "curve";
-  c.out = o.out;
-  c.vtu = o.vtu;
-  c.json = o.json;
+  auto c = hom::tools::shared_cad_command_options("curve", o);
   c.curve.p = o.p;
-  c.curve.measure = o.measure;
-  c.curve.solver = o.solver;
   c.curve.pcont = o.pcont == "on"    ? hom::cad::CurveOptions::Continuation::on
                   : o.pcont == "off" ? hom::cad::CurveOptions::Continuation::off
                                      : hom::cad::CurveOptions::Continuation::automatic;
-  c.curve.threads = o.threads;
   c.curve.iterations_after_valid = o.iterations_after_valid;
-  c.curve.verbose = o.verbose;
-  c.curve.certify = o.certify;
-  c.curve.certify_depth = o.certify_depth;
-  c.curve.certify_rounds = o.certify_rounds;
   return c;
 }
 

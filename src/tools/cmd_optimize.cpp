@@ -282,21 +282,10 @@ int optimize_on_cad(const OptimizeCli& o) {
   const hom::cad::CadModel cad = hom::cad::read_cad(o.cad);  // CadError names the file
   std::printf("%s\n", cad.summary().c_str());
   for (const auto& h : cad.healing()) std::printf("  healed: %s\n", h.c_str());
-  hom::tools::CadCommandOptions c;
-  c.command = "optimize";
-  c.out = o.out;
-  c.vtu = o.vtu;
-  c.json = o.json;
-  c.curve.measure = o.measure;
-  c.curve.solver = o.solver;
+  auto c = hom::tools::shared_cad_command_options("optimize", o);
   c.curve.pcont = o.pcont ? hom::cad::CurveOptions::Continuation::on : hom::cad::CurveOptions::Continuation::automatic;
-  c.curve.threads = o.threads;
   c.curve.max_iterations = o.max_iterations;
   c.curve.surface_max_iterations = o.max_iterations;
-  c.curve.verbose = o.verbose;
-  c.curve.certify = o.certify;
-  c.curve.certify_depth = o.certify_depth;
-  c.curve.certify_rounds = o.certify_rounds;
   const auto data = hom::io::read_msh_data(o.in);
   return hom::tools::with_mesh<hom::WarpBlend>(data, [&](auto& mesh) -> int {
     using F = typename std::decay_t<decltype(mesh)>::family;

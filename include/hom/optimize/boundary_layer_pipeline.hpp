@@ -20,7 +20,16 @@
 ///                   measured against
 ///                   the straight-sided (c): "the ideal mesh is represented by
 ///                   the viscous linear mesh";
-///   (e) "optimized" (d) smoothed and untangled against the same ideal.
+///   (e) "optimized" (d) smoothed and untangled against the same ideal;
+///                   with high_order_optimize.certify, every element is then
+///                   certified (Bernstein bounds) and the uncertified ones
+///                   repaired (optimize/certified.hpp), the wall held.
+///
+/// When (c) leaves inverted elements the pipeline stops there (unless
+/// stop_if_smoothed_invalid is off): (d) and (e) measure against the
+/// smoothed linear mesh, whose inverted elements make an ideal with
+/// negative determinants, so they cannot end valid and only cost time (a
+/// tangled layer under a cavity ring took longer at (e) than all the rest).
 ///
 ///     hom::BoundaryLayerPipelineOptions o;
 ///     o.layer = {.first_height = 1e-3, .growth = 2, .layers = 4};
@@ -44,6 +53,7 @@
 
 #include <chrono>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -66,13 +76,16 @@ struct BoundaryLayerPipelineOptions {
   BoundaryLayerOptions layer;
   int p = 2;                             ///< degree of stages (d) and (e) (>= 1)
   OptimizeOptions linear_optimize;       ///< stage (c)
-  OptimizeOptions high_order_optimize;   ///< stage (e)
+  OptimizeOptions high_order_optimize;   ///< stage (e), its certify stage included
   /// At (d), move the layer's free nodes with the wall (detail::carry_wall_curving):
   /// without it the curving of the wall is absorbed by the first level alone,
   /// which inverts it wherever the sub-facet's sagitta is a sizeable fraction
   /// of the first height (for p = 2, about a quarter). false reproduces the
   /// thesis's stage (d), which moves the wall nodes only.
   bool carry_layer = true;
+  /// Stop after (c) when the smoothed linear mesh still has inverted
+  /// elements (file comment); off runs (d) and (e) whatever (c) left.
+  bool stop_if_smoothed_invalid = true;
   /// Called after each stage with its name, e.g. to print progress.
   std::function<void(const std::string&)> progress;
 };
@@ -97,10 +110,22 @@ struct BoundaryLayerPipelineResult {
   using MeshT = Mesh<Simplex<Dim>>;
   BoundaryLayer<Dim> layer;   ///< stage (b): inserted mesh, stretched ideal, levels, aspect ratio
   MeshT smoothed;             ///< stage (c), linear
-  MeshT mesh;                 ///< stage (e), degree p: the result
-  std::vector<BoundaryLayerStage> stages;  ///< (a) to (e)
+  MeshT mesh;                 ///< stage (e), degree p: the result (the (c) mesh when stopped_after_smoothing)
+  std::vector<BoundaryLayerStage> stages;  ///< (a) to (e), or (a) to (c) when stopped_after_smoothing
   bool valid = false;         ///< no inverted element in the result
+  /// (c) left inverted elements and the pipeline stopped there
+  /// (BoundaryLayerPipelineOptions::stop_if_smoothed_invalid).
+  bool stopped_after_smoothing = false;
+  /// Stage (e)'s certify-and-repair outcome, when high_order_optimize.certify
+  /// (the stage's statistics are of the repaired mesh).
+  std::optional<CertificationOutcome> certification;
   double time_s = 0.0;        ///< stages (b) to (e)
+
+  /// What the last stage's quality is measured against: the smoothed linear
+  /// mesh (straight-sided) after (e), the stretched layer ideal after (c).
+  IdealMesh<Simplex<Dim>> final_ideal() const {
+    return stopped_after_smoothing ? layer.ideal : smoothed.straight_sided_ideal();
+  }
 };
 
 namespace detail {
@@ -252,6 +277,12 @@ BoundaryLayerPipelineResult<Dim> boundary_layer_pipeline(const Mesh<Simplex<Dim>
   out.stages.push_back(detail::measure_stage(out.smoothed, out.layer.ideal, "smoothed", "layer"));
   detail::record_optimization(out.stages.back(), rc);
   progress(out.stages.back());
+  if (options.stop_if_smoothed_invalid && out.stages.back().quality.inverted > 0) {
+    out.mesh = out.smoothed;
+    out.stopped_after_smoothing = true;
+    out.time_s = seconds_since(start);
+    return out;  // valid stays false
+  }
 
   // (d)
   t = Clock::now();
@@ -269,6 +300,7 @@ BoundaryLayerPipelineResult<Dim> boundary_layer_pipeline(const Mesh<Simplex<Dim>
   const auto re = optimize(out.mesh, linear_ideal, options.high_order_optimize);
   out.stages.push_back(detail::measure_stage(out.mesh, linear_ideal, "optimized", "smoothed-linear"));
   detail::record_optimization(out.stages.back(), re);
+  out.certification = re.certification;
   progress(out.stages.back());
 
   out.valid = out.stages.back().quality.inverted == 0;
