@@ -78,6 +78,7 @@
 #endif
 
 #include "harness.hpp"
+#include "plot_script.hpp"
 #include "hom/io/json.hpp"
 #include "hom/io/report.hpp"
 
@@ -684,33 +685,6 @@ std::string fixed(double v, int digits = 4) {
   return os.str();
 }
 
-std::string shell_quote(const std::string& s) {
-  std::string r = "'";
-  for (char c : s) r += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return r + "'";
-}
-
-/// Runs the plotting script if /usr/bin/python3 with matplotlib is there;
-/// otherwise says so. Never fails the run.
-void run_plot(const Options& o) {
-  const std::string python = "/usr/bin/python3";
-  if (!fs::exists(python)) {
-    std::cout << "plot: " << python << " not found; skipping the PNG figures\n";
-    return;
-  }
-  if (std::system((python + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
-    std::cout << "plot: matplotlib is not available to " << python << "; skipping the PNG figures\n";
-    return;
-  }
-  if (!fs::exists(o.plot_script)) {
-    std::cout << "plot: script " << o.plot_script.string() << " not found; skipping the PNG figures\n";
-    return;
-  }
-  const std::string cmd = python + " " + shell_quote(o.plot_script.string()) + " " + shell_quote(o.out.string());
-  std::cout << "plot: " << cmd << '\n' << std::flush;
-  if (std::system(cmd.c_str()) != 0) std::cout << "plot: the plotting script failed (CSV files are complete)\n";
-}
-
 int run(const Options& o) {
   const auto t_start = Clock::now();
   fs::create_directories(o.out);
@@ -964,7 +938,10 @@ int run(const Options& o) {
     js.stream() << '\n';
     js.commit();
   }
-  if (o.plot) run_plot(o);
+  if (o.plot) {
+    std::cout << std::flush;
+    hom::bench::run_plot_script(o.plot_script, o.out);
+  }
   if (!checks.failures().empty()) {
     std::cerr << "bench_measures: " << checks.failures().size() << " of the thesis's claims not reproduced\n";
     return 1;

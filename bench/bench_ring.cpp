@@ -77,6 +77,7 @@
 #endif
 
 #include "harness.hpp"
+#include "plot_script.hpp"
 #include "ring_mesh.hpp"
 #include "hom/element/sub_elements.hpp"
 #include "hom/io/report.hpp"
@@ -175,12 +176,6 @@ constexpr double quad_min_quality_bound = 0.5;
 // Helpers.
 
 using hom::bench::fmt;
-
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
 
 /// The quadrature of the optimizer and of the statistics: the thesis's rule
 /// (exactness 6p - 3 on triangles, 4p - 1 per axis on quadrilaterals) or
@@ -585,26 +580,6 @@ QuadResult run_quads(const QuadMesh& linear, int p, const Options& o, FigureData
 
 // ---------------------------------------------------------------------------
 
-void run_plot(const Options& o) {
-  const std::string python = "/usr/bin/python3";
-  if (!fs::exists(python)) {
-    std::printf("plot: %s not found; skipping the PNG figures\n", python.c_str());
-    return;
-  }
-  if (std::system((python + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
-    std::printf("plot: matplotlib is not available to %s; skipping the PNG figures\n", python.c_str());
-    return;
-  }
-  if (!fs::exists(o.plot_script)) {
-    std::printf("plot: script %s not found; skipping the PNG figures\n", o.plot_script.string().c_str());
-    return;
-  }
-  const std::string cmd = python + " " + shell_quote(o.plot_script.string()) + " " + shell_quote(o.out.string());
-  std::printf("plot: %s\n", cmd.c_str());
-  std::fflush(stdout);
-  if (std::system(cmd.c_str()) != 0) std::printf("plot: the plotting script failed (CSV files are complete)\n");
-}
-
 std::vector<int> parse_degrees(const std::string& s) {
   std::vector<int> out;
   std::stringstream ss(s);
@@ -951,7 +926,7 @@ int main(int argc, char** argv) {
     std::printf("\nwrote %s: ring_table_d1.csv, ring_pcontinuation.csv, ring_quads.csv, ring_outlines.csv, "
                 "ring_nodes.csv%s; report %s\n",
                 o.out.string().c_str(), o.vtu ? ", VTU files" : "", json_path.string().c_str());
-    if (o.plot) run_plot(o);
+    if (o.plot) hom::bench::run_plot_script(o.plot_script, o.out);
 
     bool ok = true;
     std::printf("\nClaim checks:\n");

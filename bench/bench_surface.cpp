@@ -88,6 +88,7 @@
 #include <boost/program_options.hpp>
 
 #include "harness.hpp"
+#include "plot_script.hpp"
 #include "hom/basis/lagrange.hpp"
 #include "hom/element/cube.hpp"
 #include "hom/element/node_layout.hpp"
@@ -163,32 +164,6 @@ struct Context {
 void write_text(const fs::path& path, const std::string& text) {
   hom::io::write_atomically(path.string(),
                             [&](std::FILE* f) { hom::io::write_all(f, path.string(), text.data(), text.size()); });
-}
-
-std::string shell_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-void run_plot(const Options& o) {
-  const std::string python = "/usr/bin/python3";
-  if (!fs::exists(python)) {
-    std::printf("plot: %s not found; skipping the PNG figures\n", python.c_str());
-    return;
-  }
-  if (std::system((python + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
-    std::printf("plot: matplotlib is not available to %s; skipping the PNG figures\n", python.c_str());
-    return;
-  }
-  if (!fs::exists(o.plot_script)) {
-    std::printf("plot: script %s not found; skipping the PNG figures\n", o.plot_script.string().c_str());
-    return;
-  }
-  const std::string cmd = python + " " + shell_quote(o.plot_script.string()) + " " + shell_quote(o.out.string());
-  std::printf("plot: %s\n", cmd.c_str());
-  std::fflush(stdout);
-  if (std::system(cmd.c_str()) != 0) std::printf("plot: the plotting script failed (CSV files are complete)\n");
 }
 
 Json point_json(double x, double y) { return Json::array({x, y}); }
@@ -878,7 +853,6 @@ void run_table52(Context& ctx) {
                                         fmt(E[s], 6) + " <= 1e-3 (proposition 5.2)");
 }
 
-
 /// Robustness (section 5.5.1.3 analogue): a degree-5 triangle mesh of a patch
 /// of a torus (non-developable: the patch spans positive and negative Gaussian
 /// curvature), structured in (u, v); its interior nodes are perturbed in
@@ -1018,7 +992,7 @@ int run(Context& ctx) {
   std::printf("%d/%d claim checks passed; CSV and JSON (%s) in %s (%.2f s, peak RSS %.0f MB)\n",
               ctx.checks.count() - int(ctx.checks.failures().size()), ctx.checks.count(), json.string().c_str(),
               ctx.o.out.string().c_str(), total, hom::bench::peak_rss_mb());
-  if (ctx.o.plot) run_plot(ctx.o);
+  if (ctx.o.plot) hom::bench::run_plot_script(ctx.o.plot_script, ctx.o.out);
   if (!ctx.checks.failures().empty()) {
     std::fprintf(stderr, "bench_surface: %zu claim checks failed\n", ctx.checks.failures().size());
     return 1;
