@@ -588,7 +588,9 @@ void run_stretching(Runner& run, const std::vector<int>& degrees) {
   const hom::Circle<2> circle(Eigen::Vector2d::Zero(), 0.5);
   hom::GeometryModel<2> geometry;
   geometry.add_curve(wall, circle);
-  const hom::WallProjection<2> project = [&](const Eigen::Vector2d& x) { return circle.evaluate(circle.project(x)); };
+  const hom::WallProjection<2> project = [&](const Eigen::Vector2d& x, const std::vector<int>&) {
+    return circle.evaluate(circle.project(x));
+  };
   const int layers = quick ? 6 : 8;
   const double H = 0.1;  // total height: 40% of the first ring of the annulus
   const std::vector<int> exponents = quick ? std::vector<int>{2, 6} : std::vector<int>{2, 4, 6, 8};

@@ -19,6 +19,7 @@
 #include "hom/mesh/elevate.hpp"
 #include "hom/geometry/circle.hpp"
 #include "hom/geometry/plane.hpp"
+#include "hom/geometry/sphere.hpp"
 #include "hom/optimize/boundary_layer_pipeline.hpp"
 #include "hom/quality/certify.hpp"
 #include "hom/mesh/structured.hpp"
@@ -412,4 +413,52 @@ TEST_CASE("boundary layer pipeline: stage (e) certified and repaired on request"
   const auto c = hom::certify_mesh(r.mesh, hom::CertifyOptions{});
   CHECK(c.valid == r.mesh.num_elements());
   CHECK(c.min_scaled_jacobian > 0.0);
+}
+
+TEST_CASE("boundary layer: midpoints projected onto their own wall entities, the shared edge onto both") {
+  // Walls x = 0 and z = 0 of the cube, meeting along the edge x = z = 0 (two
+  // mesh edges there). Record what each midpoint's projection is asked.
+  const auto in = box<3>(2);
+  const int a = side_tag<3>(0), b = side_tag<3>(2);
+  std::vector<std::vector<int>> asked;
+  const hom::WallProjection<3> record = [&](const Eigen::Vector3d& x, const std::vector<int>& entities) {
+    asked.push_back(entities);
+    return x;
+  };
+  const auto bl = hom::insert_boundary_layer(in, {a, b}, {.first_height = 0.02, .layers = 2}, record);
+  REQUIRE(!asked.empty());
+  int shared = 0;
+  for (const auto& e : asked) {
+    REQUIRE(!e.empty());
+    CHECK(std::is_sorted(e.begin(), e.end()));
+    if (e.size() == 2) {
+      CHECK(e == std::vector<int>{std::min(a, b), std::max(a, b)});
+      ++shared;
+    } else {
+      CHECK(e.size() == 1);
+      CHECK((e[0] == a || e[0] == b));
+    }
+  }
+  CHECK(shared == 2);
+  REQUIRE(bl.facet_tags.size() == std::size_t(bl.num_wall_facets));
+  for (int t : bl.facet_tags) CHECK((t == a || t == b));
+}
+
+TEST_CASE("boundary layer pipeline: a point on several wall entities goes to their intersection") {
+  hom::GeometryModel<3> g;
+  g.add_surface(1, hom::Sphere(Eigen::Vector3d::Zero(), 1.0));
+  g.add_surface(2, hom::Plane(Eigen::Vector3d(0.0, 0.0, 0.5), Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d x(0.7, 0.3, 0.6);
+  // One entity: its closest point.
+  const Eigen::Vector3d on_sphere = hom::detail::project_onto_wall_entities<3>(g, {1}, x);
+  CHECK((on_sphere - x.normalized()).norm() < 1e-12);
+  // Two: the circle |y| = 1, z = 0.5, where the nearest-entity projection
+  // would leave the point on one of them only.
+  const Eigen::Vector3d y = hom::detail::project_onto_wall_entities<3>(g, {1, 2}, x);
+  CHECK(y.norm() == doctest::Approx(1.0).epsilon(1e-10));
+  CHECK(y.z() == doctest::Approx(0.5).epsilon(1e-10));
+  // ... in the meridian plane of x, as the circle's closest point is.
+  CHECK(std::abs(y.x() * x.y() - y.y() * x.x()) < 1e-10);
+  const Eigen::Vector3d nearest = hom::detail::project_to_nearest_wall<3>(g, {1, 2}, x);
+  CHECK(std::abs(nearest.norm() - 1.0) + std::abs(nearest.z() - 0.5) > 1e-3);
 }

@@ -164,6 +164,7 @@ struct BoundaryLayer {
   /// ordered so that the extrusion (into the domain) is the right-hand
   /// normal of (a, b, c) (3D) or lies left of a -> b (2D).
   std::vector<std::array<int, detail::layer_num_sites<Dim>>> facet_wall_nodes;
+  std::vector<int> facet_tags;      ///< per wall facet: its entity tag
   std::vector<int> wall_nodes;      ///< nodes on the wall: vertex copies and edge midpoints
   std::vector<int> moved_nodes;     ///< the original wall vertices, moved into the domain
   /// Layer nodes on the wall border above the wall (interfaces >= 1 and the
@@ -181,9 +182,15 @@ struct BoundaryLayer {
 };
 
 /// Projection of a point onto the wall, for placing the wall midpoints on a
-/// curved wall (empty: midpoints stay on the flat facets).
+/// curved wall (empty: midpoints stay on the flat facets). `entities` are the
+/// entity tags of the wall facets around the point, ascending: one inside a
+/// wall entity; two or more on an edge where wall entities meet, the point
+/// then belonging on their intersection. Projecting onto the nearest of all
+/// wall entities instead would put a midpoint on a neighbouring face where
+/// the chord's sagitta exceeds the distance to that face.
 template <int Dim>
-using WallProjection = std::function<Eigen::Matrix<double, Dim, 1>(const Eigen::Matrix<double, Dim, 1>&)>;
+using WallProjection = std::function<Eigen::Matrix<double, Dim, 1>(const Eigen::Matrix<double, Dim, 1>&,
+                                                                    const std::vector<int>& entities)>;
 
 namespace detail {
 
@@ -374,7 +381,13 @@ BoundaryLayer<Dim, Nodes> insert_boundary_layer(const Mesh<Simplex<Dim>, Nodes>&
       throw std::invalid_argument("hom::insert_boundary_layer: opposite wall normals at the ends of edge (" +
                                   std::to_string(s.ends[0]) + ", " + std::to_string(s.ends[1]) + ")");
     s.normal = sum.normalized();
-    if (project_to_wall) s.position = project_to_wall(s.wall_position);
+    if (project_to_wall) {
+      std::vector<int> entities;
+      for (int f : s.facets) entities.push_back(wall[f].tag);
+      std::sort(entities.begin(), entities.end());
+      entities.erase(std::unique(entities.begin(), entities.end()), entities.end());
+      s.position = project_to_wall(s.wall_position, entities);
+    }
   }
 
   // --- nodes ------------------------------------------------------------------
@@ -562,6 +575,7 @@ BoundaryLayer<Dim, Nodes> insert_boundary_layer(const Mesh<Simplex<Dim>, Nodes>&
     auto& w = out.facet_wall_nodes.emplace_back();
     for (int i = 0; i < detail::layer_num_sites<Dim>; ++i) w[i] = node_id(fs[i], 0);
   }
+  for (const auto& w : wall) out.facet_tags.push_back(w.tag);
   out.num_original_elements = E0;
   out.num_wall_facets = int(wall.size());
   out.total_height = H;

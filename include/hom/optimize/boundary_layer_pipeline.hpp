@@ -6,8 +6,11 @@
 ///
 ///   (a) "inviscid"  the linear isotropic input, measured against itself;
 ///   (b) "inserted"  the boundary-layer topology (mesh/boundary_layer.hpp),
-///                   the new wall midpoints placed on the wall geometry,
-///                   measured against the per-element stretched ideal;
+///                   the new wall midpoints placed on the wall geometry
+///                   (each on its facets' own wall entity, on the
+///                   intersection where two meet:
+///                   detail::project_onto_wall_entities), measured against
+///                   the per-element stretched ideal;
 ///   (c) "smoothed"  (b) smoothed and untangled against that ideal at p = 1
 ///                   (chapter 4), the wall and outer boundary nodes fixed
 ///                   (every node not classified free is held; the layer's
@@ -159,11 +162,30 @@ Eigen::Matrix<double, Dim, 1> project_to_nearest_wall(const GeometryModel<Dim>& 
   return best;
 }
 
+/// The point of the wall entities `entities` (their geometry in `model`)
+/// that x belongs at: on one entity its closest point; on several (x on an
+/// edge where they meet) alternating projections onto each, which converge
+/// to their intersection where they meet at an angle (and stay within the
+/// projections' distance of it where they meet tangentially). Entities
+/// without geometry in `model` are skipped; with none left, x.
+template <int Dim>
+Eigen::Matrix<double, Dim, 1> project_onto_wall_entities(const GeometryModel<Dim>& model, const std::vector<int>& entities,
+                                                         const Eigen::Matrix<double, Dim, 1>& x) {
+  Eigen::Matrix<double, Dim, 1> y = project_to_nearest_wall<Dim>(model, entities, x);
+  if (entities.size() < 2) return y;
+  for (int sweep = 0; sweep < 100; ++sweep) {
+    const Eigen::Matrix<double, Dim, 1> start = y;
+    for (int t : entities) y = project_to_nearest_wall<Dim>(model, {t}, y);
+    if ((y - start).norm() <= 1e-13 * (1.0 + y.norm())) break;
+  }
+  return y;
+}
+
 /// Moves every free node of a layer element with the curving of the wall
 /// below it, fading out across the layer: a node x over wall facet f has its
 /// foot y on the flat sub-facet (of f's 1-to-4 / 1-to-2 split, positions of
 /// `linear`) under it and its height t above it; it moves by
-/// max(0, 1 - t / H) (P(y) - y), P the projection onto the wall. At the wall
+/// max(0, 1 - t / H) (P(y) - y), P the projection onto f's wall entity. At the wall
 /// (t = 0) this is curve_boundary's own move; at the top of the layer, none.
 template <int Dim>
 void carry_wall_curving(Mesh<Simplex<Dim>>& mesh, const BoundaryLayer<Dim>& layer, const Mesh<Simplex<Dim>>& linear,
@@ -178,7 +200,9 @@ void carry_wall_curving(Mesh<Simplex<Dim>>& mesh, const BoundaryLayer<Dim>& laye
   const Coordinates<Dim> start = mesh.nodes();
   for (int e = 0; e < mesh.num_elements(); ++e) {
     if (!layer.wall_facet[e]) continue;
-    const auto& w = layer.facet_wall_nodes[*layer.wall_facet[e]];
+    const int facet = *layer.wall_facet[e];
+    const auto& w = layer.facet_wall_nodes[facet];
+    const std::vector<int> entity{layer.facet_tags[facet]};
     for (int i : mesh.element(e)) {
       if (done[i] || mesh.node_class(i).kind != NodeKind::free) continue;
       done[i] = 1;
@@ -209,7 +233,7 @@ void carry_wall_curving(Mesh<Simplex<Dim>>& mesh, const BoundaryLayer<Dim>& laye
       }
       const double t = std::abs(normal.dot(x - foot));
       const double weight = std::max(0.0, 1.0 - t / H);
-      if (weight > 0.0) mesh.node(i) = x + weight * (project(foot) - foot);
+      if (weight > 0.0) mesh.node(i) = x + weight * (project(foot, entity) - foot);
     }
   }
 }
@@ -261,8 +285,8 @@ BoundaryLayerPipelineResult<Dim> boundary_layer_pipeline(const Mesh<Simplex<Dim>
 
   // (b)
   auto t = Clock::now();
-  const WallProjection<Dim> project = [&](const Eigen::Matrix<double, Dim, 1>& x) {
-    return detail::project_to_nearest_wall<Dim>(geometry, wall_tags, x);
+  const WallProjection<Dim> project = [&](const Eigen::Matrix<double, Dim, 1>& x, const std::vector<int>& entities) {
+    return detail::project_onto_wall_entities<Dim>(geometry, entities, x);
   };
   out.layer = insert_boundary_layer(inviscid, wall_tags, options.layer, project);
   const double insert_s = seconds_since(t);
