@@ -127,4 +127,29 @@ cases = json.load(open(sys.argv[1]))["cases"]
 assert [c["stage"] for c in cases] == ["inviscid", "inserted", "smoothed"], cases
 assert cases[-1]["inverted"] > 0 and cases[-1]["valid"] is False and cases[-1]["output"] is None, cases[-1]
 PY
+# 7. --solids on a model whose two solids touch without sharing faces (a
+# body and the far field around it, each with its own copy of the
+# interface; test/box_in_box_model.py): --solids 2 gives the far field alone,
+# its cavity's faces a boundary; --solids 1 the body alone; both together
+# more elements than either. A solid the model lacks, and --solids with
+# --mesh, are refused.
+bib="$(dirname "$0")/box_in_box_model.py"
+"$py" "$bib" model "$work/bib.brep" || fail "could not write the two-solid model (python3-gmsh)"
+declare -A n_linear
+for s in 2 1 1,2; do
+  log=$("$hom" curve "$work/bib.brep" --solids $s --p 2 --size 0.25 -o "$work/bib_$s.msh" --json "$work/bib_$s.json" \
+        --threads 1 2>&1); rc=$?
+  echo "$log" | tail -3 | sed "s/^/  [solids $s] /"
+  [[ $rc -eq 0 && -s "$work/bib_$s.msh" ]] || fail "--solids $s: exit $rc or no mesh"
+  n_linear[${s/,/+}]=$(json_field "$work/bib_$s.json" volume linear elements)
+done
+"$py" "$bib" outside "$work/bib_2.msh" || fail "--solids 2: the mesh is not of the far field alone"
+"$py" "$bib" inside "$work/bib_1.msh" || fail "--solids 1: the mesh is not of the body alone"
+[[ ${n_linear[1+2]} -eq $(( ${n_linear[1]} + ${n_linear[2]} )) ]] ||
+  fail "--solids 1,2: ${n_linear[1+2]} elements, not the sum of solid 1's (${n_linear[1]}) and solid 2's (${n_linear[2]})"
+for args in "--solids 3" "--solids 0" "--solids x" "--solids 1 --mesh $work/bib_1.msh"; do
+  err=$("$hom" curve "$work/bib.brep" --p 2 -o "$work/bibbad.msh" --threads 1 $args 2>&1 >/dev/null); rc=$?
+  [[ $rc -eq 2 ]] || fail "bad --solids '$args': exit $rc, expected 2: $err"
+done
+[[ ! -e "$work/bibbad.msh" ]] || fail "bad --solids: output written"
 echo "OK"

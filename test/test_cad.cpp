@@ -7,6 +7,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -493,6 +494,63 @@ TEST_CASE("meshing the cube with a cavity: every boundary node on the CAD") {
   } catch (const cad::MeshingError& e) {
     CHECK(std::string(e.what()).find("node " + std::to_string(moved)) != std::string::npos);
   }
+}
+
+TEST_CASE("a body and its far field that share no faces: mesh one solid (CadMeshOptions::solids)") {
+  // The ball and the cube with a spherical cavity around it, assembled: two
+  // sphere faces on the interface, one per solid (like a ring in a sphere
+  // region read from CAD).
+  const Eigen::Vector3d c = Eigen::Vector3d::Constant(2.5);
+  const auto m = cad::assemble({cad::sphere_model(c, 0.5), cad::cube_with_cavity_model(5.0, 1.0)}, "ball_in_box");
+  REQUIRE(m.num_solids() == 2);
+  REQUIRE(m.num_faces() == 1 + 7);
+  CHECK(m.solid_faces(1) == std::vector<int>{1});  // the parts' order
+  CHECK(m.surface(1).type() == "sphere");
+  CHECK(m.inner_shell_faces().size() == 1);
+  CHECK(m.inner_shell_faces().front() != 1);  // the far field's own copy of the sphere
+  cad::CadMeshOptions o;
+  o.size = 1.0;
+  for (int v = 1; v <= m.num_vertices(); ++v)  // finer on the ball
+    if ((m.vertex(v) - c).norm() < 1.0) o.vertex_sizes[v] = 0.25;
+  auto mesh_of = [&](std::vector<int> solids) {
+    o.solids = std::move(solids);
+    return cad::cad_mesh_data(m, o);
+  };
+  auto count = [](const io::MshData& d, int dim) {
+    return std::count_if(d.elements.begin(), d.elements.end(), [&](const auto& e) { return e.entity.dim == dim; });
+  };
+  const auto both = mesh_of({}), ball = mesh_of({1}), far = mesh_of({2});
+  CHECK(count(ball, 3) > 0);
+  CHECK(count(far, 3) > count(ball, 3));
+  CHECK(count(ball, 3) + count(far, 3) == count(both, 3));
+  CHECK(count(ball, 2) + count(far, 2) == count(both, 2));  // no face is shared
+  CHECK(mesh_of({1, 2}).elements.size() == both.elements.size());
+  // The far field alone: its solid's elements, its faces' facets, and no
+  // node inside the ball; every node is used by an element.
+  const auto far_faces = m.solid_faces(2);
+  std::set<std::int64_t> used;
+  for (const auto& e : far.elements) {
+    if (e.entity.dim == 3) CHECK(e.entity.tag == 2);
+    if (e.entity.dim == 2) CHECK(std::count(far_faces.begin(), far_faces.end(), e.entity.tag) == 1);
+    for (auto n : far.nodes_of(e)) used.insert(n);
+  }
+  CHECK(used.size() == far.nodes.size());
+  double nearest = 1e9;
+  for (const auto& n : far.nodes) nearest = std::min(nearest, (Eigen::Vector3d(n.x[0], n.x[1], n.x[2]) - c).norm());
+  CHECK(nearest == doctest::Approx(0.5).epsilon(1e-6));
+  for (const auto& en : far.entities)
+    if (en.id.dim == 3) CHECK(en.id.tag == 2);
+  // The ball alone: every node in it.
+  for (const auto& n : ball.nodes) CHECK((Eigen::Vector3d(n.x[0], n.x[1], n.x[2]) - c).norm() <= 0.5 + 1e-6);
+  // Tetrahedra of the far field alone: its cavity's faces are boundary facets.
+  o.solids = {2};
+  const auto tets = cad::mesh_cad<Simplex<3>>(m, o);
+  std::set<int> facet_faces;
+  for (const auto& f : tets.boundary_facets()) facet_faces.insert(f.entity_tag);
+  CHECK(facet_faces == std::set<int>(far_faces.begin(), far_faces.end()));
+  // A solid the model lacks.
+  CHECK_THROWS_AS(mesh_of({3}), cad::MeshingError);
+  CHECK_THROWS_AS(mesh_of({0}), cad::MeshingError);
 }
 
 TEST_CASE("surface meshes of the NURBS sphere: triangles and quadrilaterals on the patches") {

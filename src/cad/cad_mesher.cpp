@@ -151,6 +151,44 @@ std::map<int, int> match_entities(const CadModel& cad, const io::MshData& d, int
   return out;
 }
 
+// The entities of the chosen solids' closure: the solids, their faces, the
+// faces' edges and the edges' end vertices.
+std::set<EntityId> solid_closure(const CadModel& cad, const std::vector<int>& solids) {
+  std::set<EntityId> kept;
+  for (int s : solids) {
+    kept.insert({3, s});
+    for (int f : cad.solid_faces(s)) {
+      kept.insert({2, f});
+      for (int e : cad.face_edges(f)) {
+        kept.insert({1, e});
+        for (int v : cad.edge_vertices(e)) kept.insert({0, v});
+      }
+    }
+  }
+  return kept;
+}
+
+// Keeps the elements on the entities of `kept` (model tags), the nodes they
+// use and those entities; element node lists are rebuilt.
+void keep_entities(io::MshData& d, const std::set<EntityId>& kept) {
+  std::vector<io::MshElement> elements;
+  std::vector<std::int64_t> element_nodes;
+  std::set<std::int64_t> used;
+  for (const auto& e : d.elements) {
+    if (!kept.count(e.entity)) continue;
+    const auto nodes = d.nodes_of(e);
+    io::MshElement k = e;
+    k.first = element_nodes.size();
+    element_nodes.insert(element_nodes.end(), nodes.begin(), nodes.end());
+    used.insert(nodes.begin(), nodes.end());
+    elements.push_back(k);
+  }
+  std::erase_if(d.nodes, [&](const io::MshNode& n) { return !used.count(n.tag); });
+  std::erase_if(d.entities, [&](const Entity& en) { return !kept.count(en.id); });
+  d.elements = std::move(elements);
+  d.element_nodes = std::move(element_nodes);
+}
+
 }  // namespace
 
 io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
@@ -158,6 +196,11 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   if (cad.num_faces() == 0) throw MeshingError(cad.name() + ": the model has no faces to mesh");
   if (o.dim == 3 && cad.num_solids() == 0)
     throw MeshingError(cad.name() + ": the model has no solid (only surfaces): it can be meshed in 2D (surface mesh) only");
+  for (int s : o.solids)
+    if (s < 1 || s > cad.num_solids())
+      throw MeshingError(cad.name() + ": no solid " + std::to_string(s) + " (the model has " +
+                         (cad.num_solids() == 0 ? std::string("no solids") : "solids 1.." + std::to_string(cad.num_solids())) +
+                         ")");
   const double size = cad.size();
   const double tol = o.tolerance * size;
   // Gmsh 4.8.4's quad subdivision puts the nodes it adds near, not on, the
@@ -337,6 +380,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   for (auto& e : d.elements)
     if (!remap(e.entity))
       throw MeshingError(cad.name() + ": mesh element " + std::to_string(e.tag) + " is on an unmatched Gmsh entity");
+  if (!o.solids.empty()) keep_entities(d, solid_closure(cad, o.solids));
   return d;
 }
 

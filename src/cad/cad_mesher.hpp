@@ -66,6 +66,13 @@ struct CadMeshOptions {
   int threads = 1;               ///< General.NumThreads (1: deterministic)
   bool verbose = false;          ///< Gmsh's messages on the terminal
   double tolerance = 1e-8;       ///< classification tolerance, relative to the model's size
+  /// Solids to keep (model tags), empty: all. The others are meshed too
+  /// (Gmsh meshes the model whole) but left out of the result with their
+  /// faces, edges and vertices that no kept solid has: a model whose solids
+  /// touch without sharing faces (a body and the far field around it, each
+  /// with its own copy of the interface) gives the mesh of one region. For a
+  /// surface mesh (dim 2), the faces of these solids.
+  std::vector<int> solids;
 };
 
 /// Meshes the model with Gmsh and returns the mesh as MSH data with the

@@ -576,6 +576,17 @@ CadModel cube_with_cavity_model(double side, double sphere_diameter) {
   });
 }
 
+CadModel assemble(const std::vector<CadModel>& parts, const std::string& name) {
+  if (parts.empty()) throw std::invalid_argument("hom::cad::assemble: no parts");
+  return built(name, [&] {
+    BRep_Builder builder;
+    TopoDS_Compound compound;
+    builder.MakeCompound(compound);
+    for (const auto& p : parts) builder.Add(compound, p.data().shape);
+    return TopoDS_Shape(compound);
+  });
+}
+
 CadModel nurbs_sphere_model(const Eigen::Vector3d& center, double radius) {
   if (!(radius > 0)) throw std::invalid_argument("hom::cad::nurbs_sphere_model: radius must be positive");
   return built("nurbs_sphere", [&] {

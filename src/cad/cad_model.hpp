@@ -178,5 +178,11 @@ CadModel cube_with_cavity_model(double side = 5.0, double sphere_diameter = 1.0)
 /// B-spline (NURBS) patch, sewn into one closed shell and one solid
 /// (section 6.3.3.1's sphere described by a NURBS CAD).
 CadModel nurbs_sphere_model(const Eigen::Vector3d& center = Eigen::Vector3d::Zero(), double radius = 0.5);
+/// The parts' solids (and faces) in one model, a compound in which parts
+/// share no topology: where two parts touch, each keeps its own faces, as a
+/// body and the far field around it often come from CAD. Tags follow the
+/// order of the parts (the first part's solids first). A model given twice
+/// is the same shape and counts once.
+CadModel assemble(const std::vector<CadModel>& parts, const std::string& name = "assembly");
 
 }  // namespace hom::cad

@@ -52,28 +52,44 @@ inline std::vector<int> faces_off_bounding_box(const cad::CadModel& cad) {
   return faces;
 }
 
-/// The default wall of an external flow, a body inside a far-field domain:
-/// the faces of the solids' cavities (inner shells) or, for a model whose
-/// body is cut into the outer shell (a wing section spanning a box), the
-/// faces off the bounding box.
-inline std::vector<int> default_walls(const cad::CadModel& cad) {
-  auto faces = cad.inner_shell_faces();
-  if (faces.empty()) faces = faces_off_bounding_box(cad);
-  if (faces.empty())
-    throw UsageError("curve: " + cad.name() +
-                     " has no cavity and every face lies on its bounding box, so there is no default wall: name it "
-                     "with --bl-walls");
+/// The CAD faces that carry boundary facets of `mesh`: those of the solids
+/// meshed (all of them, or those of --solids).
+inline std::set<int> meshed_faces(const Mesh<Simplex<3>>& mesh) {
+  std::set<int> faces;
+  for (const auto& f : mesh.boundary_facets()) faces.insert(f.entity_tag);
   return faces;
 }
 
-/// The wall faces: the given tags, checked, or the default.
-inline std::vector<int> wall_faces(const cad::CadModel& cad, const std::vector<int>& given) {
-  if (given.empty()) return default_walls(cad);
+/// The default wall of an external flow, a body inside a far-field domain:
+/// the faces of the solids' cavities (inner shells) or, for a model whose
+/// body is cut into the outer shell (a wing section spanning a box), the
+/// faces off the bounding box; of these, the faces of the meshed solids.
+inline std::vector<int> default_walls(const cad::CadModel& cad, const std::set<int>& meshed) {
+  auto of_mesh = [&](std::vector<int> faces) {
+    std::erase_if(faces, [&](int f) { return !meshed.count(f); });
+    return faces;
+  };
+  auto faces = of_mesh(cad.inner_shell_faces());
+  if (faces.empty()) faces = of_mesh(faces_off_bounding_box(cad));
+  if (faces.empty())
+    throw UsageError("curve: " + cad.name() +
+                     ": the meshed solids have no cavity and every face of theirs lies on the model's bounding box, so "
+                     "there is no default wall: name it with --bl-walls");
+  return faces;
+}
+
+/// The wall faces: the given tags, checked (faces of the model that bound
+/// the meshed solids), or the default.
+inline std::vector<int> wall_faces(const cad::CadModel& cad, const std::vector<int>& given, const std::set<int>& meshed) {
+  if (given.empty()) return default_walls(cad, meshed);
   std::set<int> faces;
   for (int f : given) {
     if (f < 1 || f > cad.num_faces())
       throw UsageError("curve: --bl-walls " + std::to_string(f) + ": " + cad.name() + " has faces 1.." +
                        std::to_string(cad.num_faces()));
+    if (!meshed.count(f))
+      throw UsageError("curve: --bl-walls " + std::to_string(f) + ": face " + std::to_string(f) +
+                       " bounds no meshed solid (the linear mesh has no facet on it)");
     faces.insert(f);
   }
   return {faces.begin(), faces.end()};
@@ -98,7 +114,7 @@ inline double wall_distance(const Mesh<Simplex<3>>& mesh, const std::vector<int>
 /// status: 0 written, 3 invalid (only the JSON report written).
 inline int boundary_layer_and_write(const cad::CadModel& cad, const Mesh<Simplex<3>>& linear,
                                     const CadBoundaryLayerOptions& bl, const CadCommandOptions& o) {
-  const auto walls = wall_faces(cad, bl.walls);
+  const auto walls = wall_faces(cad, bl.walls, meshed_faces(linear));
   BoundaryLayerPipelineOptions opt;
   opt.layer = bl.layer;
   opt.p = o.curve.p;

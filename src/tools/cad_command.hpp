@@ -45,9 +45,7 @@ CadCommandOptions shared_cad_command_options(std::string command, const Cli& o) 
   c.curve.solver = o.solver;
   c.curve.threads = o.threads;
   c.curve.verbose = o.verbose;
-  c.curve.certify = o.certify;
-  c.curve.certify_depth = o.certify_depth;
-  c.curve.certify_rounds = o.certify_rounds;
+  o.certify.apply_to(c.curve);
   return c;
 }
 

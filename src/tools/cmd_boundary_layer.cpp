@@ -40,6 +40,7 @@
 
 #include "boundary_layer_report.hpp"
 #include "certification_report.hpp"
+#include "certify_options.hpp"
 #include "command.hpp"
 #include "hom/geometry/circle.hpp"
 #include "hom/geometry/sphere.hpp"
@@ -59,9 +60,8 @@ struct BoundaryLayerCli {
   std::string in, out, walls, geometry = "none", json, vtu;
   double first = 0.0, growth = 2.0, extrusion = 0.1;
   int layers = 7, p = 2, threads = 0, max_iterations = 200;
-  bool verbose = false, certify = false;
-  int certify_depth = hom::CertifyOptions{}.max_depth;
-  int certify_rounds = hom::CertifyRepairOptions{}.max_rounds;
+  bool verbose = false;
+  hom::tools::CertifyCli certify;
 };
 
 /// Entity tags of the walls: physical groups of dimension Dim - 1 first.
@@ -130,9 +130,7 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
     s->max_iterations = o.max_iterations;
     s->verbose = o.verbose;
   }
-  opt.high_order_optimize.certify = o.certify;
-  opt.high_order_optimize.certify_depth = o.certify_depth;
-  opt.high_order_optimize.certify_rounds = o.certify_rounds;
+  o.certify.apply_to(opt.high_order_optimize);
   if (o.verbose) opt.progress = [](const std::string& stage) { std::fprintf(stderr, "stage %s done\n", stage.c_str()); };
 
   std::printf("%s: %s mesh, %d elements, %d nodes; walls:", o.in.c_str(), D == 3 ? "tetrahedral" : "triangular",
@@ -148,8 +146,8 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
     std::printf("INVALID: %s\n", hom::tools::smoothed_tangled_message(r).c_str());
   else
     std::printf("%s\n", r.valid ? "valid at every quadrature point" : "INVALID: some elements have det <= 0 at a quadrature point");
-  if (r.certification) hom::tools::print_certification(*r.certification, o.certify_depth);
-  const bool certified = !o.certify || (r.certification && r.certification->certified());
+  if (r.certification) hom::tools::print_certification(*r.certification, o.certify.depth);
+  const bool certified = !o.certify.on || (r.certification && r.certification->certified());
   if (r.valid && !certified)
     std::printf("NOT CERTIFIED: %d of %d elements are not certified valid after the repair rounds\n",
                 int(r.certification->uncertified.size()), r.mesh.num_elements());
@@ -164,7 +162,7 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
   }
   if (!o.json.empty()) {
     auto cases = hom::tools::boundary_layer_cases(o.in, r, opt.layer);
-    if (r.certification) hom::tools::add_certification(cases.back(), *r.certification, o.certify_depth);
+    if (r.certification) hom::tools::add_certification(cases.back(), *r.certification, o.certify.depth);
     hom::io::write_report(o.json, "hom boundary-layer", HOM_VERSION, std::move(cases));
     std::printf("wrote %s\n", o.json.c_str());
   }
@@ -187,9 +185,7 @@ void check_options(const BoundaryLayerCli& o) {
   if (o.p < 1 || o.p > 10) throw UsageError("boundary-layer: --p must be in 1..10, got " + std::to_string(o.p));
   if (o.threads < 0) throw UsageError("boundary-layer: --threads must be >= 0 (0: OpenMP's default)");
   if (o.max_iterations < 1) throw UsageError("boundary-layer: --max-iterations must be >= 1");
-  if (o.certify_depth < 0 || o.certify_depth > 20)
-    throw UsageError("boundary-layer: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
-  if (o.certify_rounds < 0) throw UsageError("boundary-layer: --certify-rounds must be >= 0");
+  o.certify.check("boundary-layer");
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu"))
     throw UsageError("boundary-layer: --vtu file name must end in .vtu");
   if (o.vtu == o.out || (!o.json.empty() && (o.json == o.out || o.json == o.vtu)))
@@ -222,14 +218,10 @@ int run(int argc, char** argv) {
       ("max-iterations", po::value(&o.max_iterations)->default_value(200), "iteration limit per optimization")  //
       ("json", po::value(&o.json), "write every stage's statistics as JSON")                   //
       ("vtu", po::value(&o.vtu), "write the result colored by quality and layer level (ParaView)")  //
-      ("certify", po::bool_switch(&o.certify),
-       "certify the sign of det everywhere in each element of the result (Bernstein bounds) and repair "
-       "folds between quadrature points")  //
-      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
-       "subdivision depth of the certification")  //
-      ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
-       "repair rounds at most (0: certify only)")  //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per iteration (stderr)");
+  o.certify.declare(opts,
+                    "certify the sign of det everywhere in each element of the result (Bernstein bounds) and repair "
+                    "folds between quadrature points");
   po::variables_map vm;
   if (!hom::tools::parse_options("boundary-layer", argc, argv, opts, {{"input", po::value(&o.in)}}, vm)) return 0;
   check_options(o);

@@ -1,5 +1,5 @@
 // hom curve [MODEL.step|.stp|.iges|.igs|.brep] [--mesh LINEAR.msh] [--p P (2)] [-o OUT.msh (curved.msh)]
-//           [--size H] [--size-curvature N] [--surface] [--quads]
+//           [--size H] [--size-curvature N] [--solids TAGS] [--surface] [--quads]
 //           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
 //           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
 //           [--certify [--certify-depth N] [--certify-rounds N]]
@@ -17,7 +17,10 @@
 // What is meshed: tetrahedra when the model has solids (unless --surface);
 // a planar model (all faces in one plane) gives a planar mesh in z = 0
 // (moved there if needed); other models a surface mesh. --quads asks for
-// quadrilaterals (surface and planar meshes).
+// quadrilaterals (surface and planar meshes). --solids keeps the mesh of
+// some solids (and, with --surface, of their faces): one region of a model
+// whose solids touch without sharing faces, such as a body and the far
+// field around it.
 //
 // The result is checked before anything is written: every element valid at
 // every quadrature point (against its straight-sided ideal; surface elements
@@ -54,6 +57,7 @@
 
 #include "cad_boundary_layer.hpp"
 #include "cad_command.hpp"
+#include "certify_options.hpp"
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
 #include "command.hpp"
@@ -73,6 +77,7 @@ struct CurveCli {
   bool p_given = false;  ///< --p on the command line (a curved --mesh keeps its own degree)
   double size = 0.0;
   int size_curvature = 0;
+  std::string solids;  ///< --solids: model solid tags, comma-separated (empty: all)
   bool surface = false;
   bool quads = false;
   std::string measure = "shape";
@@ -82,9 +87,7 @@ struct CurveCli {
   double tolerance = 1e-6;
   int iterations_after_valid = -1;
   bool verbose = false;
-  bool certify = false;
-  int certify_depth = hom::cad::CurveOptions{}.certify_depth;
-  int certify_rounds = hom::cad::CurveOptions{}.certify_rounds;
+  hom::tools::CertifyCli certify;
   double bl_first = 0.0;  ///< > 0: insert a boundary layer
   double bl_growth = 2.0, bl_extrusion = 0.1;
   int bl_layers = 7;
@@ -140,13 +143,22 @@ void check_options(const CurveCli& o) {
   if (o.size_curvature < 0) throw UsageError("curve: --size-curvature must be >= 0");
   if (o.threads < 0) throw UsageError("curve: --threads must be >= 0 (0: OpenMP's default)");
   if (!(o.tolerance > 0)) throw UsageError("curve: --tolerance must be positive");
-  if (o.certify_depth < 0 || o.certify_depth > 20)
-    throw UsageError("curve: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
-  if (o.certify_rounds < 0) throw UsageError("curve: --certify-rounds must be >= 0");
-  if (o.mesh.empty() == false && (o.size > 0 || o.size_curvature > 0))
-    throw UsageError("curve: --size and --size-curvature apply to the built-in mesher, not to --mesh");
+  o.certify.check("curve");
+  if (o.mesh.empty() == false && (o.size > 0 || o.size_curvature > 0 || !o.solids.empty()))
+    throw UsageError("curve: --size, --size-curvature and --solids apply to the built-in mesher, not to --mesh");
   if (o.bl_first != 0.0) check_boundary_layer_options(o);
   else if (o.bl_options_given) throw UsageError("curve: the --bl-* options need --bl-first H (the first layer's height)");
+}
+
+/// The solids of --solids, checked against the model.
+std::vector<int> solid_tags(const hom::cad::CadModel& cad, const std::string& list) {
+  auto tags = hom::tools::parse_tag_list("curve", "--solids", list);
+  for (int s : tags)
+    if (s < 1 || s > cad.num_solids())
+      throw hom::tools::UsageError("curve: --solids " + std::to_string(s) + ": " + cad.name() +
+                                   (cad.num_solids() == 0 ? std::string(" has no solids")
+                                                          : " has solids 1.." + std::to_string(cad.num_solids())));
+  return tags;
 }
 
 /// The boundary layer's settings; the walls checked against the model later.
@@ -192,6 +204,9 @@ int run(int argc, char** argv) {
       ("size", po::value(&o.size)->default_value(0.0), "element size (0: model size / 20)")          //
       ("size-curvature", po::value(&o.size_curvature)->default_value(0),
        "elements per 2 pi radians of curvature (0: off)")                                            //
+      ("solids", po::value(&o.solids),
+       "mesh only these solids (model tags, comma-separated; default all): one region of a model whose "
+       "solids touch without sharing faces")  //
       ("surface", po::bool_switch(&o.surface), "surface mesh of a model with solids")               //
       ("quads", po::bool_switch(&o.quads), "quadrilaterals (surface and planar meshes)")            //
       ("measure", po::value(&o.measure)->default_value("shape"), "distortion measure: shape | oddy")  //
@@ -204,13 +219,6 @@ int run(int argc, char** argv) {
        "volume stage: stop once valid this many iterations (-1: optimize to convergence)")         //
       ("tolerance", po::value(&o.tolerance)->default_value(1e-6),
        "--mesh: classification tolerance, relative to the model's size")                             //
-      ("certify", po::bool_switch(&o.certify),
-       "certify the sign of det everywhere in each element (Bernstein bounds), repair folds between quadrature "
-       "points by moving interior nodes; an uncertified result is not written")  //
-      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
-       "subdivision levels before an element is undecided (0..20)")  //
-      ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
-       "repair rounds at most (0: certify only)")  //
       ("bl-first", po::value(&o.bl_first)->default_value(0.0),
        "insert a boundary layer: height of its first layer (0: none)")  //
       ("bl-growth", po::value(&o.bl_growth)->default_value(2.0), "boundary layer: ratio of consecutive heights (>= 1)")  //
@@ -223,6 +231,9 @@ int run(int argc, char** argv) {
       ("vtu", po::value(&o.vtu), "write the curved mesh colored by quality (ParaView)")              //
       ("json", po::value(&o.json), "write the statistics of every stage as JSON")                    //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per optimizer iteration (stderr)");
+  o.certify.declare(opts,
+                    "certify the sign of det everywhere in each element (Bernstein bounds), repair folds between "
+                    "quadrature points by moving interior nodes; an uncertified result is not written");
   po::variables_map vm;
   if (!hom::tools::parse_options("curve", argc, argv, opts, {{"model", po::value(&o.model)}}, vm)) return 0;
   o.p_given = vm.count("p") && !vm["p"].defaulted();
@@ -238,6 +249,7 @@ int run(int argc, char** argv) {
   mo.size = o.size;
   mo.size_from_curvature = o.size_curvature;
   mo.threads = 1;
+  if (!o.solids.empty()) mo.solids = solid_tags(cad, o.solids);
   if (o.model.empty() && o.size == 0.0) {
     // The built-in model: graded towards the cavity as in test_cad (about
     // 1400 tetrahedra; table 4.1's mesh is of this kind).

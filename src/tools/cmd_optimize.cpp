@@ -49,6 +49,7 @@
 #include <boost/program_options.hpp>
 
 #include "certification_report.hpp"
+#include "certify_options.hpp"
 #include "command.hpp"
 #include "hom/io/report.hpp"
 #include "hom/measure/oddy_measure.hpp"
@@ -88,9 +89,7 @@ struct OptimizeCli {
   bool verbose = false;
   int threads = 0;
   int max_iterations = 200;
-  bool certify = false;
-  int certify_depth = hom::CertifyOptions{}.max_depth;
-  int certify_rounds = hom::CertifyRepairOptions{}.max_rounds;
+  hom::tools::CertifyCli certify;
 };
 
 double peak_rss_mb() {
@@ -144,9 +143,7 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
   opt.threads = o.threads;
   opt.max_iterations = o.max_iterations;
   opt.verbose = o.verbose;
-  opt.certify = o.certify;
-  opt.certify_depth = o.certify_depth;
-  opt.certify_rounds = o.certify_rounds;
+  o.certify.apply_to(opt);
 
   std::printf("%s: %s of degree %d, %d elements, %d nodes (%d free, %ld free coordinates)\n", o.in.c_str(),
               std::string(F::name).c_str(), mesh.degree(), mesh.num_elements(), mesh.num_nodes(), free_nodes, free_dofs);
@@ -205,17 +202,17 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
 
   // The certify stage's outcome (or, with no free nodes, the certificate alone).
   std::optional<hom::CertificationOutcome> certification;
-  if (o.certify) {
+  if (o.certify.on) {
     if (result) {
       certification = result->certification;
     } else {
       hom::CertifyOptions co;
-      co.max_depth = o.certify_depth;
+      co.max_depth = o.certify.depth;
       co.threads = o.threads;
       certification = hom::certification_outcome(hom::certify_mesh(mesh, co).elements, hom::RepairStop::no_free_nodes);
     }
   }
-  if (certification) hom::tools::print_certification(*certification, o.certify_depth);
+  if (certification) hom::tools::print_certification(*certification, o.certify.depth);
 
   // Outputs only once the optimization is done, each written atomically.
   hom::io::write_msh(o.out, mesh, same_format_as(data));
@@ -261,7 +258,7 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
         .set("converged", result ? result->result.converged : true)
         .set("time_s", result ? result->time_s : 0.0)
         .set("peak_rss_mb", peak_rss_mb());
-    if (certification) hom::tools::add_certification(optimized, *certification, o.certify_depth);
+    if (certification) hom::tools::add_certification(optimized, *certification, o.certify.depth);
     hom::io::write_report(o.json, "hom optimize", HOM_VERSION, {make_case("initial", initial), std::move(optimized)});
     std::printf("wrote %s\n", o.json.c_str());
   }
@@ -330,9 +327,7 @@ void check_options(OptimizeCli& o) {
     throw UsageError("optimize: --scope must be invalid or whole-mesh, got '" + o.scope + "'");
   if (o.threads < 0) throw UsageError("optimize: --threads must be >= 0 (0: OpenMP's default)");
   if (o.max_iterations < 1) throw UsageError("optimize: --max-iterations must be >= 1");
-  if (o.certify_depth < 0 || o.certify_depth > 20)
-    throw UsageError("optimize: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
-  if (o.certify_rounds < 0) throw UsageError("optimize: --certify-rounds must be >= 0");
+  o.certify.check("optimize");
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu")) throw UsageError("optimize: --vtu file name must end in .vtu");
   if (!o.cad.empty()) {
     // On a CAD model every element is measured against its straight-sided
@@ -384,19 +379,15 @@ int run(int argc, char** argv) {
        "quadrature: default | thesis (exact to degree 6p-3)")                                       //
       ("threads", po::value(&o.threads)->default_value(0), "threads (0: OpenMP's default)")       //
       ("max-iterations", po::value(&o.max_iterations)->default_value(200), "iteration limit per stage")  //
-      ("certify", po::bool_switch(&o.certify),
-       "certification as the final acceptance test: certify the sign of det everywhere in each element "
-       "(Bernstein bounds) and keep optimizing elements that fold between quadrature points")  //
-      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
-       "subdivision levels before an element is undecided (0..20)")  //
-      ("certify-rounds", po::value(&o.certify_rounds)->default_value(o.certify_rounds),
-       "repair rounds at most (0: certify only)")                                              //
       ("cad", po::value(&o.cad), "CAD model (.step, .iges, .brep) the mesh lies on: optimize on it")  //
       ("tolerance", po::value(&o.tolerance)->default_value(1e-6),
        "--cad: classification tolerance, relative to the model's size")                       //
       ("json", po::value(&o.json), "write the statistics before and after as JSON")               //
       ("vtu", po::value(&o.vtu), "write the optimized mesh colored by quality (ParaView)")        //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per iteration (stderr)");
+  o.certify.declare(opts,
+                    "certification as the final acceptance test: certify the sign of det everywhere in each element "
+                    "(Bernstein bounds) and keep optimizing elements that fold between quadrature points");
   po::variables_map vm;
   if (!hom::tools::parse_options("optimize", argc, argv, opts, {{"input", po::value(&o.in)}}, vm)) return 0;
   check_options(o);

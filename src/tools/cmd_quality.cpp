@@ -25,6 +25,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "certify_options.hpp"
 #include "command.hpp"
 #include "hom/io/report.hpp"
 #include "hom/measure/oddy_measure.hpp"
@@ -46,8 +47,7 @@ struct QualityOptions {
   std::string quadrature = "default";
   std::string vtu;
   std::string json;
-  bool certify = false;
-  int certify_depth = hom::CertifyOptions{}.max_depth;
+  hom::tools::CertifyCli certify;  // --certify-rounds not declared: quality only certifies
 };
 
 void print_row(const char* label, const hom::Statistics& s) {
@@ -85,12 +85,12 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
   std::vector<double> status;
   hom::io::Json::Object certified;  // the certificate's JSON keys
   bool certified_ok = true;
-  if (o.certify) {
+  if (o.certify.on) {
     if constexpr (surface) {
       std::printf("\n--certify: certification covers planar and volume meshes; skipped for this surface mesh\n");
     } else {
       hom::CertifyOptions co;
-      co.max_depth = o.certify_depth;
+      co.max_depth = o.certify.depth;
       const auto c = hom::certify_mesh(mesh, co);
       std::printf("\ncertified (Bernstein bounds of det D phi_P, subdivision depth <= %d, deepest used %d):\n",
                   co.max_depth, c.max_depth);
@@ -166,13 +166,12 @@ int run(int argc, char** argv) {
        "ideal element: straight (each element's straight-sided counterpart) | equilateral")  //
       ("quadrature", po::value(&o.quadrature)->default_value("default"),
        "quadrature: default | thesis (exact to degree 6p-3)")                                   //
-      ("certify", po::bool_switch(&o.certify),
-       "certify the sign of det everywhere in each element (Bernstein bounds, adaptive subdivision): "
-       "#certified valid / invalid / undecided and a certified lower bound of the scaled Jacobian")  //
-      ("certify-depth", po::value(&o.certify_depth)->default_value(o.certify_depth),
-       "subdivision levels (2^dim pieces each) before an element is reported undecided")  //
       ("vtu", po::value(&o.vtu), "write a VTU colored by quality (ParaView)")                    //
       ("json", po::value(&o.json), "write the statistics as JSON");
+  o.certify.declare(opts,
+                    "certify the sign of det everywhere in each element (Bernstein bounds, adaptive subdivision): "
+                    "#certified valid / invalid / undecided and a certified lower bound of the scaled Jacobian",
+                    /*repair=*/false);
   po::variables_map vm;
   if (!hom::tools::parse_options("quality", argc, argv, opts, {{"mesh", po::value(&o.path)}}, vm)) return 0;
   if (o.path.empty()) throw hom::tools::UsageError("quality: need a mesh file (see 'hom quality --help')");
@@ -185,8 +184,7 @@ int run(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     throw hom::tools::UsageError(std::string("quality: ") + e.what());
   }
-  if (o.certify_depth < 0 || o.certify_depth > 20)
-    throw hom::tools::UsageError("quality: --certify-depth must be in 0..20, got " + std::to_string(o.certify_depth));
+  o.certify.check("quality");
   if (!o.vtu.empty() && !hom::tools::ends_with(o.vtu, ".vtu"))
     throw hom::tools::UsageError("quality: --vtu file name must end in .vtu");
 
