@@ -38,7 +38,14 @@
 /// fraction to their heights: `full_height_positions` has every node at its
 /// full height (fraction 1), and a caller moves the held border nodes there
 /// before smoothing (boundary_layer_pipeline.hpp does), accepting that the
-/// elements between them and the free nodes may start inverted.
+/// elements between them and the free nodes may start inverted. Since the
+/// elements among held nodes only cannot be repaired, the full-height stack
+/// of an edge midpoint is the isoparametric one between the curved wall and
+/// the straight top edge (see the nodes section of insert_boundary_layer),
+/// which stays untangled on a wall edge with a large sagitta (a wing's
+/// leading edge at the box faces) where stacking along the normal pokes
+/// through the transition's top. A wall-border midpoint lies on the curve
+/// its edge lies on, also where one end is a model vertex bounding it.
 ///
 /// Ideal (section 6.3.3.1: "each element on the viscous part is idealized by
 /// a tetrahedron that presents the proper stretching along the normal
@@ -401,10 +408,34 @@ BoundaryLayer<Dim, Nodes> insert_boundary_layer(const Mesh<Simplex<Dim>, Nodes>&
   // The same nodes at the full heights (fraction 1), for the nodes smoothing
   // cannot move there (BoundaryLayer::full_height_positions).
   Coordinates X_full = X;
+  // At full height an edge-midpoint site's stack is the isoparametric one
+  // of its macro prism, linear in zeta_k = H_k / H between the curved wall
+  // point P (the projected midpoint) and the midpoint of the straight top
+  // edge c + H nbar (c the chord midpoint, nbar the mean of the end vertices'
+  // normals): x_k = (1 - zeta_k) P + zeta_k (c + H nbar). Stacking along the
+  // normal instead, P + H_k n, puts interface L - 1 above that top edge where
+  // the sagitta s is large against H and the end normals diverge by theta
+  // (s + H_{L-1} > H cos(theta / 2)): on the NACA 0012 section's leading
+  // edge (chord 0.139, theta = 79 deg, s = 0.011 along n, H = 0.0254) by
+  // 0.0237 against 0.0197, a tangle the smoother cannot undo where these
+  // nodes are held (the wall border). The isoparametric stack is monotone
+  // whenever the top is above the wall (H cos(theta / 2) > s), with every
+  // level scaled by the same factor, and it is what carry_wall_curving
+  // (boundary_layer_pipeline.hpp) does to the layer at (d). The stacks at
+  // the extrusion fraction stay along the normal (only the topology is
+  // wanted there, thesis section 6.3.3.1; the smoother places the free ones).
+  auto full_height = [&](const Site& st, int k) -> Point {
+    const double Hk = options.cumulative_height(k);
+    if (st.is_vertex()) return st.position + Hk * st.normal;
+    const Point nbar = 0.5 * (sites[site_of.at({st.ends[0], st.ends[0]})].normal +
+                              sites[site_of.at({st.ends[1], st.ends[1]})].normal);
+    const double zeta = Hk / H;
+    return (1.0 - zeta) * st.position + zeta * (st.wall_position + H * nbar);
+  };
   for (int k = 0; k < L; ++k)
     for (int s = 0; s < S; ++s) {
       X.col(node_id(s, k)) = sites[s].position + f_ext * options.cumulative_height(k) * sites[s].normal;
-      X_full.col(node_id(s, k)) = sites[s].position + options.cumulative_height(k) * sites[s].normal;
+      X_full.col(node_id(s, k)) = full_height(sites[s], k);
     }
   for (const auto& s : sites)
     if (s.is_vertex()) {
@@ -491,19 +522,50 @@ BoundaryLayer<Dim, Nodes> insert_boundary_layer(const Mesh<Simplex<Dim>, Nodes>&
     }
     return c;
   };
+  // The curve a wall-border edge (a, b) lies on, by the rule elevate.hpp
+  // classifies edges with (SubEntityClassifier::common_curve): both ends on
+  // one curve; one on a curve and the other on a model vertex bounding it
+  // (the edge at the end of a wing's leading or trailing edge line, where it
+  // meets a box face); both on model vertices bounding one curve only.
+  // Without it such a midpoint was fixed where it lies, and its high-order
+  // edge nodes stayed on the chord at (d) while the layer above curved.
+  auto bounds = [&](EntityId curve, int point) {
+    const Entity* en = linear.find_entity(curve);
+    if (!en) return false;
+    for (int b : en->boundary)
+      if (std::abs(b) == point) return true;
+    return false;
+  };
+  auto border_curve = [&](int a, int b) -> std::optional<EntityId> {
+    if constexpr (Dim != 3) return std::nullopt;
+    const auto& ca = linear.node_class(a).entity;
+    const auto& cb = linear.node_class(b).entity;
+    if (!ca || !cb) return std::nullopt;
+    if (ca->dim == 1 && cb->dim == 1) return ca == cb ? ca : std::nullopt;
+    if (ca->dim == 1 && cb->dim == 0) return bounds(*ca, cb->tag) ? ca : std::nullopt;
+    if (ca->dim == 0 && cb->dim == 1) return bounds(*cb, ca->tag) ? cb : std::nullopt;
+    if (ca->dim == 0 && cb->dim == 0) {
+      std::optional<EntityId> found;
+      for (const auto& en : linear.entities())
+        if (en.id.dim == 1 && bounds(en.id, ca->tag) && bounds(en.id, cb->tag)) {
+          if (found) return std::nullopt;  // ambiguous
+          found = en.id;
+        }
+      return found;
+    }
+    return std::nullopt;
+  };
   for (int s = 0; s < S; ++s) {
     const Site& site = sites[s];
     NodeClass on_wall;
     if (site.is_vertex()) {
       on_wall = linear.node_class(site.ends[0]);
     } else {
-      const auto& ca = linear.node_class(site.ends[0]);
-      const auto& cb = linear.node_class(site.ends[1]);
       const auto tag = wall_tag_of(site);
-      if (!site.side_tags.empty() && ca.kind == NodeKind::on_entity && ca.entity == cb.entity && ca.entity &&
-          ca.entity->dim < Dim - 1) {
+      const auto curve = site.side_tags.empty() ? std::nullopt : border_curve(site.ends[0], site.ends[1]);
+      if (curve) {
         on_wall.kind = NodeKind::on_entity;  // border edge on a curve
-        on_wall.entity = ca.entity;
+        on_wall.entity = curve;
       } else if (site.side_tags.empty() && tag) {
         on_wall.kind = NodeKind::on_entity;
         on_wall.entity = EntityId{Dim - 1, *tag};
