@@ -31,6 +31,13 @@
 // value_gradient p = 2 / 5 / 10: 9.6 / 9.6 / 13.1 GFLOP/s (19% / 19% / 26%), Hessian-vector
 // 12.4 / 11.6 / 16.8, dense products alone 35.5 / 49.0 / 46.1.
 //
+// 2026-12-01, an idle 2-core AMD EPYC guest without AVX-512 (FMA peak 18.7-21.4 GFLOP/s from run
+// to run), after the value and value_gradient point loops went to four points at a time
+// (detail/point_lanes.hpp, ShapeMeasure::value_gradient_lanes): tet value_gradient
+// p = 2 / 5 / 10: 5.5 / 5.4 / 5.3 GFLOP/s against an 18.7 peak (29% / 29% / 28%; the medians of
+// three repetitions 29% / 28% / 29%), where the per-point code measured 3.9 / 4.1 / 5.4 against
+// 19.7 (20% / 21% / 27%) that morning; value 17.8 / 14.2 / 9.1 M points/s (was 14.0 / 11.8 / 9.1).
+//
 // Two groups of benchmarks:
 //   1. fma_peak: the peak double-precision rate of this build's widest SIMD ISA
 //      (AVX-512F, AVX2+FMA, SSE2, or scalar, from the compiler's __AVX512F__ /

@@ -534,3 +534,90 @@ TEST_CASE("figure 4.5: the regularized shape distortion has a single minimum nea
   CHECK(shape.value(figure_4_4_jacobian(-ideal_x), AbsoluteDeterminant{}) == doctest::Approx(1.0).epsilon(1e-13));
   CHECK(eta_abs[n / 2] == inf);
 }
+
+TEST_CASE("point lanes: the Newton inverse cube root agrees with std::cbrt over the whole double range") {
+  constexpr int W = hom::detail::point_lanes;
+  Rng rng(11);
+  std::uniform_real_distribution<double> exponent(-300.0, 300.0);
+  double worst = 0.0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    double s[W], y[W];
+    for (int l = 0; l < W; ++l) s[l] = std::pow(10.0, trial < 10000 ? exponent(rng) / 10.0 : exponent(rng));
+    hom::detail::inverse_cube_root<W>(s, y);
+    for (int l = 0; l < W; ++l) worst = std::max(worst, std::abs(y[l] * std::cbrt(s[l]) - 1.0));
+  }
+  CHECK(worst < 1e-15);  // a few ulps, std::cbrt's own error included
+  // Exact cubes, the single-precision range's ends and lanes outside it.
+  double s[W] = {8.0, 1e-30, 1e30, 0.125}, y[W];
+  hom::detail::inverse_cube_root<W>(s, y);
+  CHECK(y[0] == doctest::Approx(0.5).epsilon(1e-15));
+  CHECK(y[3] == doctest::Approx(2.0).epsilon(1e-15));
+  double t[W] = {1e-200, 1e200, 0.0, -8.0}, z[W];
+  hom::detail::inverse_cube_root<W>(t, z);
+  CHECK(z[0] == doctest::Approx(1.0 / std::cbrt(1e-200)).epsilon(1e-15));
+  CHECK(z[1] == doctest::Approx(1.0 / std::cbrt(1e200)).epsilon(1e-15));
+  CHECK(z[2] == inf);
+  CHECK(z[3] == doctest::Approx(-0.5).epsilon(1e-15));
+}
+
+TEST_CASE("point lanes: first_jet of sigma_delta and sigma_0 is jet's value and first derivative") {
+  constexpr int W = hom::detail::point_lanes;
+  const double samples[] = {-1e200, -3.0, -1e-3, -1e-12, 0.0, 1e-12, 1e-3, 0.7, 5.0, 1e200, -1e-300, 1e-300};
+  for (double delta : {0.0, 1e-3, 0.0316, 2.0}) {
+    const RegularizedDeterminant reg{delta};
+    for (std::size_t k = 0; k + W <= std::size(samples); k += W) {
+      double s[W], v[W], d[W];
+      for (int l = 0; l < W; ++l) s[l] = samples[k + l];
+      reg.first_jet<W>(s, v, d);
+      for (int l = 0; l < W; ++l) {
+        CAPTURE(delta);
+        CAPTURE(s[l]);
+        const auto jet = reg.jet(s[l]);
+        CHECK(v[l] == doctest::Approx(jet.value).epsilon(1e-14));
+        CHECK(d[l] == doctest::Approx(jet.first).epsilon(1e-14));
+      }
+    }
+  }
+  const ClampedDeterminant clamped;
+  double s[W] = {-1.0, 0.0, 1e-300, 2.0}, v[W], d[W];
+  clamped.first_jet<W>(s, v, d);
+  for (int l = 0; l < W; ++l) {
+    CHECK(v[l] == clamped.jet(s[l]).value);
+    CHECK(d[l] == clamped.jet(s[l]).first);
+  }
+}
+
+TEST_CASE_TEMPLATE("point lanes: value_gradient_lanes is value_gradient in every lane", T, Shape2, Shape3) {
+  constexpr int D = T::dim, W = hom::detail::point_lanes;
+  const typename T::Measure measure;
+  static_assert(hom::BatchedMeasureFor<typename T::Measure, D, RegularizedDeterminant>);
+  static_assert(hom::BatchedMeasureFor<typename T::Measure, D, ClampedDeterminant>);
+  static_assert(!hom::BatchedMeasureFor<OddyMeasure, D, ClampedDeterminant>);
+  Rng rng(29);
+  auto check = [&](const auto& reg) {
+    for (int trial = 0; trial < 500; ++trial) {
+      double J[D * D][W], grad[D * D][W], eta[W];
+      Mat<D> Js[W];
+      for (int l = 0; l < W; ++l) {
+        Js[l] = random_matrix<D>(rng);
+        if (trial % 5 == 0) Js[l] *= 1e-12;  // tiny determinants: the cube root's fallback
+        for (int i = 0; i < D * D; ++i) J[i][l] = Js[l].data()[i];
+      }
+      measure.template value_gradient_lanes<D, W>(J, reg, grad, eta);
+      for (int l = 0; l < W; ++l) {
+        Mat<D> g;
+        const double e = measure.value_gradient(Js[l], reg, g);
+        if (!std::isfinite(e)) {
+          CHECK(eta[l] == inf);
+          continue;
+        }
+        CHECK(eta[l] == doctest::Approx(e).epsilon(1e-13));
+        Mat<D> gl;
+        for (int i = 0; i < D * D; ++i) gl.data()[i] = grad[i][l];
+        CHECK((gl - g).norm() <= 1e-13 * g.norm());
+      }
+    }
+  };
+  check(RegularizedDeterminant{0.0316});
+  check(ClampedDeterminant{});
+}

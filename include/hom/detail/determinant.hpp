@@ -12,6 +12,8 @@
 
 #include <Eigen/Core>
 
+#include "hom/detail/point_lanes.hpp"
+
 namespace hom::detail {
 
 template <int Dim>
@@ -45,6 +47,47 @@ SquareMatrix<Dim> cofactor(const SquareMatrix<Dim>& J) {
     }
   }
   return C;
+}
+
+/// cof(J) in W lanes (point_lanes.hpp: J and C are Dim^2 x W, row i + Dim j
+/// entry (i, j)), the same products as cofactor().
+template <int Dim, int W>
+void cofactor_lanes(const double (&J)[Dim * Dim][W], double (&C)[Dim * Dim][W]) {
+  static_assert(Dim == 2 || Dim == 3, "hom::detail::cofactor_lanes: only 2x2 and 3x3 Jacobians");
+  auto at = [](int i, int j) { return i + Dim * j; };
+  HOM_LANES
+  for (int l = 0; l < W; ++l) {
+    if constexpr (Dim == 2) {
+      C[at(0, 0)][l] = J[at(1, 1)][l];
+      C[at(0, 1)][l] = -J[at(1, 0)][l];
+      C[at(1, 0)][l] = -J[at(0, 1)][l];
+      C[at(1, 1)][l] = J[at(0, 0)][l];
+    } else {
+      for (int i = 0; i < 3; ++i) {
+        const int a = (i + 1) % 3, b = (i + 2) % 3;
+        C[at(i, 0)][l] = J[at(a, 1)][l] * J[at(b, 2)][l] - J[at(a, 2)][l] * J[at(b, 1)][l];
+        C[at(i, 1)][l] = J[at(a, 2)][l] * J[at(b, 0)][l] - J[at(a, 0)][l] * J[at(b, 2)][l];
+        C[at(i, 2)][l] = J[at(a, 0)][l] * J[at(b, 1)][l] - J[at(a, 1)][l] * J[at(b, 0)][l];
+      }
+    }
+  }
+}
+
+/// det(J) in W lanes (J as in cofactor_lanes), the operations of determinant().
+template <int Dim, int W>
+void determinant_lanes(const double (&J)[Dim * Dim][W], double (&det)[W]) {
+  static_assert(Dim == 2 || Dim == 3, "hom::detail::determinant_lanes: only 2x2 and 3x3 Jacobians");
+  auto at = [](int i, int j) { return i + Dim * j; };
+  HOM_LANES
+  for (int l = 0; l < W; ++l) {
+    if constexpr (Dim == 2) {
+      det[l] = J[at(0, 0)][l] * J[at(1, 1)][l] - J[at(0, 1)][l] * J[at(1, 0)][l];
+    } else {
+      det[l] = J[at(0, 0)][l] * (J[at(1, 1)][l] * J[at(2, 2)][l] - J[at(1, 2)][l] * J[at(2, 1)][l]) +
+               J[at(0, 1)][l] * (J[at(1, 2)][l] * J[at(2, 0)][l] - J[at(1, 0)][l] * J[at(2, 2)][l]) +
+               J[at(0, 2)][l] * (J[at(1, 0)][l] * J[at(2, 1)][l] - J[at(1, 1)][l] * J[at(2, 0)][l]);
+    }
+  }
 }
 
 /// det(J) from its cofactors (Laplace expansion along row 0), so that the

@@ -42,6 +42,12 @@
 ///     contracted with the rank-one directions e_a w^T, hw(a, b) = sum_{k,m} hess(a + Dim k,
 ///     b + Dim m) w_k w_m, the only part a one-node Newton step needs.
 ///
+///   - `m.value_lanes<Dim, W>(J, reg, eta)` and `m.value_gradient_lanes<Dim, W>(J, reg, grad,
+///     eta)`: value and value_gradient at W points at once, in the structure-of-arrays form
+///     of point_lanes.hpp (concept BatchedMeasureFor); the optimizer's value and gradient
+///     evaluations use them when the measure and the regularization policy (its
+///     `first_jet`) have them.
+///
 /// Models: ShapeMeasure (shape_measure.hpp, eq 3.2), OddyMeasure (oddy_measure.hpp, eq 3.3).
 ///
 /// Surfaces (chapter 5) reuse the Dim = 2 measures on the 2x2 matrix J-bar of eq 5.5
@@ -52,6 +58,7 @@
 
 #include <Eigen/Core>
 
+#include "hom/detail/point_lanes.hpp"
 #include "hom/measure/regularization.hpp"
 
 namespace hom {
@@ -72,6 +79,15 @@ concept DistortionMeasure =
     requires { { M::name } -> std::convertible_to<std::string_view>; } &&
     DistortionMeasureFor<M, 2, RegularizedDeterminant> && DistortionMeasureFor<M, 3, RegularizedDeterminant> &&
     DistortionMeasureFor<M, 2, ClampedDeterminant> && DistortionMeasureFor<M, 3, ClampedDeterminant>;
+
+/// M evaluates value and value_gradient on detail::point_lanes points at once.
+template <class M, int Dim, class Reg>
+concept BatchedMeasureFor =
+    requires(const M& m, const double (&J)[Dim * Dim][detail::point_lanes], const Reg& reg,
+             double (&grad)[Dim * Dim][detail::point_lanes], double (&eta)[detail::point_lanes]) {
+      m.template value_lanes<Dim, detail::point_lanes>(J, reg, eta);
+      m.template value_gradient_lanes<Dim, detail::point_lanes>(J, reg, grad, eta);
+    };
 
 /// eta, d eta / dJ and the Hessian along the rank-one directions J + u w^T:
 /// hw(a, b) = d^2 eta(J + u w^T) / du_a du_b at u = 0. Moving one node of an

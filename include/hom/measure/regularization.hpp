@@ -12,6 +12,9 @@
 ///     a measure is +infinity where it is 0;
 ///   - `r.jet(s) -> DeterminantJet`: value, first and second derivative in s at once
 ///     (one square root instead of three on the hot path).
+/// Optional, used by the optimizer's batched point loops when present:
+///   - `r.first_jet<W>(s, v, d)`: value and first derivative in W lanes
+///     (double[W] arrays, point_lanes.hpp).
 /// Models:
 ///   - RegularizedDeterminant{delta}: sigma_delta, eq 3.4 (optimization, untangling);
 ///   - ClampedDeterminant: sigma_0, eq 3.8 (validation: q = 0 for sigma <= 0);
@@ -19,8 +22,14 @@
 ///     figure 4.5(a)/(c), where the unregularized measure has a second, inverted,
 ///     minimum at x = -sqrt(3)/2; never use it to validate a mesh).
 
+#include <algorithm>
 #include <cmath>
 #include <concepts>
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "hom/detail/point_lanes.hpp"
 
 namespace hom {
 
@@ -70,6 +79,28 @@ struct RegularizedDeterminant {
     const double v = s >= 0.0 ? 0.5 * (s + r) : 2.0 * delta * delta / (r - s);
     return {v, v / r, 2.0 * delta * delta / (r * r * r)};
   }
+
+  /// value and first derivative in W lanes at once (point_lanes.hpp): the
+  /// formulas of jet() on Eigen arrays, whose packed square root, division
+  /// and selects vectorize where hypot and a branch on the sign do not.
+  /// Overflow-safe like hypot: r = m sqrt((s/m)^2 + (2 delta/m)^2) with
+  /// m = max(|s|, 2 delta); r + |s| (= r - s below 0) is never 0 unless
+  /// delta = s = 0.
+  template <int W>
+  void first_jet(const double (&s)[W], double (&v)[W], double (&d)[W]) const {
+    using Lanes = Eigen::Array<double, W, 1>;
+    constexpr double tiny = std::numeric_limits<double>::min();
+    const Eigen::Map<const Lanes> sigma(s);
+    Eigen::Map<Lanes> value(v), slope(d);
+    const double t = 2.0 * delta;
+    const Lanes m = sigma.abs().max(t).max(tiny);
+    const Lanes r = m * ((sigma / m).square() + (t / m).square()).sqrt();
+    const Lanes below = (2.0 * delta * delta) / (r + sigma.abs()).max(tiny);
+    const Lanes above = 0.5 * (sigma + r);
+    value = (sigma >= 0.0).select(above, below);
+    const Lanes ratio = value / r.max(tiny);  // evaluated here, not inside the select
+    slope = (r > 0.0).select(ratio, Lanes::Constant(0.5));
+  }
 };
 
 /// sigma_0(s) = (s + |s|) / 2 = max(s, 0), eq 3.8: the delta -> 0 limit of eq 3.4
@@ -82,6 +113,15 @@ struct ClampedDeterminant {
   [[nodiscard]] double derivative(double s) const { return s > 0.0 ? 1.0 : 0.0; }
   [[nodiscard]] double second_derivative(double) const { return 0.0; }
   [[nodiscard]] DeterminantJet jet(double s) const { return {value(s), derivative(s), 0.0}; }
+  /// value and first derivative in W lanes at once (point_lanes.hpp).
+  template <int W>
+  void first_jet(const double (&s)[W], double (&v)[W], double (&d)[W]) const {
+    HOM_LANES
+    for (int l = 0; l < W; ++l) {
+      v[l] = s[l] > 0.0 ? s[l] : 0.0;
+      d[l] = s[l] > 0.0 ? 1.0 : 0.0;
+    }
+  }
 };
 
 /// |sigma|: eq 3.2 exactly as printed. An inverted element whose |J| is conformal

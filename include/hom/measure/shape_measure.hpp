@@ -21,6 +21,7 @@
 
 #include "hom/detail/determinant.hpp"
 #include "hom/detail/measure_chain_rule.hpp"
+#include "hom/detail/point_lanes.hpp"
 #include "hom/measure/distortion_measure.hpp"
 #include "hom/measure/regularization.hpp"
 
@@ -68,6 +69,40 @@ struct ShapeMeasure {
     return phi * g.value;
   }
 
+  /// value at W points at once (point_lanes.hpp): J is Dim^2 x W (row
+  /// i + Dim j is entry (i, j) of every lane); eta = +inf in a lane where
+  /// reg(sigma) = 0, as value.
+  template <int Dim, int W, DeterminantRegularization Reg>
+  void value_lanes(const double (&J)[Dim * Dim][W], const Reg& reg, double (&eta)[W]) const {
+    double sigma[W], s[W], ds[W], g[W], phi[W];
+    detail::determinant_lanes<Dim, W>(J, sigma);
+    value_lanes_from_determinant<Dim, W>(J, sigma, reg, s, ds, g, phi, eta);
+  }
+
+  /// value_gradient at W points at once (point_lanes.hpp), J and grad as in
+  /// value_lanes; the gradient is undefined in a lane where eta = +inf. The
+  /// same formulas: sigma from the cofactors of row 0, g = reg^(-2/d) (a
+  /// Newton cube root in 3D), and d eta / dJ = g (2/d) J + phi g' cof J with
+  /// g' = -(2/d) g reg' / reg.
+  template <int Dim, int W, DeterminantRegularization Reg>
+  void value_gradient_lanes(const double (&J)[Dim * Dim][W], const Reg& reg, double (&grad)[Dim * Dim][W],
+                            double (&eta)[W]) const {
+    constexpr double k = 2.0 / Dim;
+    double C[Dim * Dim][W], sigma[W] = {}, s[W], ds[W], g[W], phi[W], dg[W];
+    detail::cofactor_lanes<Dim, W>(J, C);
+    for (int j = 0; j < Dim; ++j) {
+      HOM_LANES
+      for (int l = 0; l < W; ++l) sigma[l] += J[Dim * j][l] * C[Dim * j][l];
+    }
+    value_lanes_from_determinant<Dim, W>(J, sigma, reg, s, ds, g, phi, eta);
+    HOM_LANES
+    for (int l = 0; l < W; ++l) dg[l] = -k * g[l] * ds[l] / s[l];
+    for (int i = 0; i < Dim * Dim; ++i) {
+      HOM_LANES
+      for (int l = 0; l < W; ++l) grad[i][l] = g[l] * k * J[i][l] + phi[l] * dg[l] * C[i][l];
+    }
+  }
+
   /// Value, gradient and the Hessian contracted with a rank-one direction,
   /// hw(a, b) = sum_{k,m} d^2 eta / dJ_ak dJ_bm w_k w_m: what a one-node
   /// Newton step needs (Gauss-Seidel, eq B.4) at a fraction of the full
@@ -91,6 +126,36 @@ struct ShapeMeasure {
     hw = Eigen::Matrix<double, Dim, Dim>::Identity() * ((2.0 / Dim) * w.squaredNorm());
     detail::compose_directional_hessian<Dim>(phi, grad_phi, g, cof, w, hw);
     return phi * g.value;
+  }
+
+ private:
+  /// The lanes' s = reg(sigma), ds = reg'(sigma), g = s^(-2/d), phi = ||J||^2 / d
+  /// and eta = phi g (+inf where s = 0). Loops over the lanes innermost, one
+  /// statement each, and selects on computed values: what vectorizes.
+  template <int Dim, int W, DeterminantRegularization Reg>
+  static void value_lanes_from_determinant(const double (&J)[Dim * Dim][W], const double (&sigma)[W], const Reg& reg,
+                                           double (&s)[W], double (&ds)[W], double (&g)[W], double (&phi)[W],
+                                           double (&eta)[W]) {
+    static_assert(Dim == 2 || Dim == 3, "hom::ShapeMeasure: J must be 2x2 or 3x3");
+    reg.template first_jet<W>(sigma, s, ds);
+    if constexpr (Dim == 3) {
+      detail::inverse_cube_root<W>(s, g);
+      HOM_LANES
+      for (int l = 0; l < W; ++l) g[l] *= g[l];
+    } else {
+      HOM_LANES
+      for (int l = 0; l < W; ++l) g[l] = 1.0 / s[l];
+    }
+    HOM_LANES
+    for (int l = 0; l < W; ++l) phi[l] = 0.0;
+    for (int i = 0; i < Dim * Dim; ++i) {
+      HOM_LANES
+      for (int l = 0; l < W; ++l) phi[l] += J[i][l] * J[i][l] * (1.0 / Dim);
+    }
+    HOM_LANES
+    for (int l = 0; l < W; ++l) eta[l] = phi[l] * g[l];
+    HOM_LANES
+    for (int l = 0; l < W; ++l) eta[l] = s[l] > 0.0 ? eta[l] : std::numeric_limits<double>::infinity();
   }
 };
 

@@ -49,6 +49,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <type_traits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -57,6 +58,8 @@
 #include <Eigen/Sparse>
 
 #include "hom/detail/parallel.hpp"
+#include "hom/detail/point_lanes.hpp"
+#include "hom/measure/distortion_measure.hpp"
 #include "hom/measure/regularization.hpp"
 #include "hom/measure/shape_measure.hpp"
 #include "hom/mesh/coloring.hpp"
@@ -271,15 +274,16 @@ class OptimizationProblem {
         const Ideal& id = ideals_[e];
         double integral = 0.0, volume = 0.0;
         bool valid = true;
-        for (int q = 0; q < num_points(); ++q) {
-          const double eta = measure_.value(point_jacobian(JP, b, q, id), ClampedDeterminant{});
-          if (!std::isfinite(eta)) {
-            valid = false;
-            break;
-          }
+        auto add = [&](int q, double eta) {
+          valid = valid && std::isfinite(eta);
           integral += id.weight(q) * eta * eta;
           volume += id.weight(q);
-        }
+        };
+        if constexpr (BatchedMeasureFor<Measure, dim, ClampedDeterminant>)
+          element_point_values_lanes(JP, b, id, ClampedDeterminant{}, add);
+        else
+          for (int q = 0; q < num_points() && valid; ++q)
+            add(q, measure_.value(point_jacobian(JP, b, q, id), ClampedDeterminant{}));
         s.valid[e] = valid;
         s.quality[e] = valid ? 1.0 / std::sqrt(integral / volume) : 0.0;  // eqs 3.20, 3.24
       }
@@ -301,10 +305,11 @@ class OptimizationProblem {
         const Ideal& id = ideals_[e];
         fe[e] = with_regularization(e, [&](const auto& reg) {
           double f = 0.0;
-          for (int q = 0; q < num_points(); ++q) {
-            const double eta = measure_.value(point_jacobian(JP, b, q, id), reg);
-            f += 0.5 * id.weight(q) * (eta - 1.0) * (eta - 1.0);
-          }
+          auto add = [&](int q, double eta) { f += 0.5 * id.weight(q) * (eta - 1.0) * (eta - 1.0); };
+          if constexpr (BatchedMeasureFor<Measure, dim, std::decay_t<decltype(reg)>>)
+            element_point_values_lanes(JP, b, id, reg, add);
+          else
+            for (int q = 0; q < num_points(); ++q) add(q, measure_.value(point_jacobian(JP, b, q, id), reg));
           return f;
         });
       }
@@ -323,16 +328,10 @@ class OptimizationProblem {
         const int e = first + b;
         const Ideal& id = ideals_[e];
         fe[e] = with_regularization(e, [&](const auto& reg) {
-          double f = 0.0;
-          for (int q = 0; q < num_points(); ++q) {
-            const NodeMatrix& A = id.inverse_jacobian(q);
-            NodeMatrix gq;
-            const double eta = measure_.value_gradient(point_jacobian(JP, b, q, id), reg, gq);
-            const double r = eta - 1.0;
-            f += 0.5 * id.weight(q) * r * r;
-            w.P.template block<dim, dim>(dim * b, dim * q).noalias() = (id.weight(q) * r) * gq * A.transpose();
-          }
-          return f;
+          if constexpr (BatchedMeasureFor<Measure, dim, std::decay_t<decltype(reg)>>)
+            return element_value_gradient_lanes(JP, b, id, reg, w.P);
+          else
+            return element_value_gradient_points(JP, b, id, reg, w.P);
         });
       }
       pull_back(w, first, count, Ge);
@@ -685,6 +684,117 @@ class OptimizationProblem {
             for (int b = 0; b < count; ++b) Xb.template block<dim, 1>(dim * b, i) = X.col(elements_(i, first + b));
         },
         fn);
+  }
+
+  // --- the point loops on detail::point_lanes points at a time ---------------
+  // (the measure's value_lanes / value_gradient_lanes, point_lanes.hpp). A
+  // batch past an element's last point is padded with that point; padded
+  // lanes are neither summed nor stored.
+  static constexpr int lanes = detail::point_lanes;
+  using LaneMatrix = double[dim * dim][lanes];
+
+  /// A_q of the points q0 .. q0 + lanes - 1 (column-major entries in rows).
+  void load_ideal_lanes(const Ideal& id, int q0, LaneMatrix& A) const {
+    for (int l = 0; l < lanes; ++l) {
+      const NodeMatrix& Aq = id.inverse_jacobian(std::min(q0 + l, num_points() - 1));
+      for (int i = 0; i < dim * dim; ++i) A[i][l] = Aq.data()[i];
+    }
+  }
+
+  /// J_q = JP_q A_q of element b of a block at the points q0 .. (JP_q: rows
+  /// dim b .., columns dim q ..).
+  void load_jacobian_lanes(const Eigen::MatrixXd& JP, int b, int q0, const LaneMatrix& A, LaneMatrix& J) const {
+    const Eigen::Index rows = JP.rows();
+    LaneMatrix JPq;
+    for (int l = 0; l < lanes; ++l) {
+      const double* col = JP.data() + dim * b + rows * dim * std::min(q0 + l, num_points() - 1);
+      for (int j = 0; j < dim; ++j)
+        for (int i = 0; i < dim; ++i) JPq[i + dim * j][l] = col[i + rows * j];
+    }
+    for (int j = 0; j < dim; ++j)
+      for (int i = 0; i < dim; ++i) {
+        HOM_LANES
+        for (int l = 0; l < lanes; ++l) J[i + dim * j][l] = 0.0;
+        for (int k = 0; k < dim; ++k) {
+          HOM_LANES
+          for (int l = 0; l < lanes; ++l) J[i + dim * j][l] += JPq[i + dim * k][l] * A[k + dim * j][l];
+        }
+      }
+  }
+
+  /// Calls fn(q, eta_q) for every point of element b of a block.
+  template <class Reg, class Fn>
+  void element_point_values_lanes(const Eigen::MatrixXd& JP, int b, const Ideal& id, const Reg& reg, Fn&& fn) const {
+    const int nq = num_points();
+    LaneMatrix A, J;
+    double eta[lanes];
+    if (id.affine()) load_ideal_lanes(id, 0, A);
+    for (int q0 = 0; q0 < nq; q0 += lanes) {
+      if (!id.affine()) load_ideal_lanes(id, q0, A);
+      load_jacobian_lanes(JP, b, q0, A, J);
+      measure_.template value_lanes<dim, lanes>(J, reg, eta);
+      for (int l = 0; l < std::min(lanes, nq - q0); ++l) fn(q0 + l, eta[l]);
+    }
+  }
+
+  /// value_gradient's point loop for element b of a block, one point at a
+  /// time (measures without value_gradient_lanes): as element_value_gradient_lanes.
+  template <class Reg>
+  double element_value_gradient_points(const Eigen::MatrixXd& JP, int b, const Ideal& id, const Reg& reg,
+                                       Eigen::MatrixXd& P) const {
+    double f = 0.0;
+    for (int q = 0; q < num_points(); ++q) {
+      const NodeMatrix& A = id.inverse_jacobian(q);
+      NodeMatrix gq;
+      const double eta = measure_.value_gradient(point_jacobian(JP, b, q, id), reg, gq);
+      const double r = eta - 1.0;
+      f += 0.5 * id.weight(q) * r * r;
+      P.template block<dim, dim>(dim * b, dim * q).noalias() = (id.weight(q) * r) * gq * A.transpose();
+    }
+    return f;
+  }
+
+  /// value_gradient's point loop for element b of a block: writes
+  /// P_q = c_q (eta_q - 1) (d eta / dJ)_q A_q^T into P's block (dim b, dim q)
+  /// and returns f_e = sum_q c_q (eta_q - 1)^2 / 2 (+inf when an eta_q is).
+  template <class Reg>
+  double element_value_gradient_lanes(const Eigen::MatrixXd& JP, int b, const Ideal& id, const Reg& reg,
+                                      Eigen::MatrixXd& P) const {
+    constexpr int D = dim;
+    const int nq = num_points();
+    const Eigen::Index rows = P.rows();
+    LaneMatrix A, J, grad, Pq;
+    double eta[lanes], c[lanes], fq[lanes];
+    if (id.affine()) load_ideal_lanes(id, 0, A);
+    double f = 0.0;
+    for (int q0 = 0; q0 < nq; q0 += lanes) {
+      const int m = std::min(lanes, nq - q0);
+      if (!id.affine()) load_ideal_lanes(id, q0, A);
+      load_jacobian_lanes(JP, b, q0, A, J);
+      measure_.template value_gradient_lanes<D, lanes>(J, reg, grad, eta);
+      for (int l = 0; l < lanes; ++l) c[l] = id.weight(std::min(q0 + l, nq - 1));
+      HOM_LANES
+      for (int l = 0; l < lanes; ++l) {
+        fq[l] = 0.5 * c[l] * (eta[l] - 1.0) * (eta[l] - 1.0);
+        c[l] *= eta[l] - 1.0;  // c_q r_q
+      }
+      for (int j = 0; j < D; ++j)  // P_q = c_q r_q grad_q A_q^T
+        for (int i = 0; i < D; ++i) {
+          HOM_LANES
+          for (int l = 0; l < lanes; ++l) Pq[i + D * j][l] = 0.0;
+          for (int k = 0; k < D; ++k) {
+            HOM_LANES
+            for (int l = 0; l < lanes; ++l) Pq[i + D * j][l] += c[l] * grad[i + D * k][l] * A[j + D * k][l];
+          }
+        }
+      for (int l = 0; l < m; ++l) {
+        f += fq[l];
+        double* col = P.data() + D * b + rows * D * (q0 + l);
+        for (int j = 0; j < D; ++j)
+          for (int i = 0; i < D; ++i) col[i + rows * j] = Pq[i + D * j][l];
+      }
+    }
+    return f;
   }
 
   /// Ge's columns of the block's elements = w.P * G^T (element b's rows Dim b ..).
