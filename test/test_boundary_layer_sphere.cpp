@@ -29,6 +29,11 @@ TEST_CASE("boundary layer pipeline: sphere of diameter 1 in a box, p = 2") {
   o.p = 2;
   // A valid result is the point here, not full convergence (keeps the test short).
   o.high_order_optimize.iterations_after_valid = 1;
+  // Valid means det > 0 at the nodes too (BoundaryLayerPipelineResult::valid):
+  // stage (e) stopped one iteration after its quadrature points were valid
+  // leaves a fold at a corner node (min scaled Jacobian -0.026), which
+  // certify-and-repair finds and mends.
+  o.high_order_optimize.certify = true;
   if (std::getenv("HOM_TEST_VERBOSE")) {  // progress of a slow run
     o.linear_optimize.verbose = o.high_order_optimize.verbose = true;
     o.progress = [](const std::string& stage) { std::fprintf(stderr, "stage %s done\n", stage.c_str()); };
@@ -41,13 +46,17 @@ TEST_CASE("boundary layer pipeline: sphere of diameter 1 in a box, p = 2") {
   CHECK(r.layer.num_wall_facets == T);
   for (int s = 1; s < 5; ++s) CHECK(r.stages[s].elements == in.num_elements() + T * (12 * 1 + 7));
   for (const auto& s : r.stages)
-    std::printf("%-9s p=%d elems=%6d nodes=%6d min=%.3f max=%.3f mean=%.3f std=%.3f inv=%d it=%d t=%.2fs\n",
+    std::printf("%-9s p=%d elems=%6d nodes=%6d min=%.3f max=%.3f mean=%.3f std=%.3f inv=%d minSJ=%.3f it=%d t=%.2fs\n",
                 s.name.c_str(), s.p, s.elements, s.nodes, s.quality.min, s.quality.max, s.quality.mean, s.quality.std_dev,
-                s.quality.inverted, s.iterations, s.time_s);
+                s.quality.inverted, s.scaled_jacobian.min, s.iterations, s.time_s);
   CHECK(r.stages[2].quality.inverted == 0);
   CHECK(r.stages[4].quality.inverted == 0);
   CHECK(r.stages[4].quality.min > 0.0);
   CHECK(r.valid);
+  CHECK(r.stages[4].scaled_jacobian.min > 0.0);
+  REQUIRE(r.certification.has_value());
+  CHECK(r.certification->certified());
+  CHECK(r.certification->valid == r.stages[4].elements);
   // The final wall: every node of a wall facet on the sphere.
   for (const auto& f : r.mesh.boundary_facets())
     if (f.entity_tag == cav.sphere_tag)
