@@ -85,6 +85,7 @@
 #include <Eigen/Dense>
 
 #include "hom/element/simplex.hpp"
+#include "hom/mesh/detail/edge_curve.hpp"
 #include "hom/mesh/detail/layer_templates.hpp"
 #include "hom/mesh/facet.hpp"
 #include "hom/mesh/mesh.hpp"
@@ -523,37 +524,13 @@ BoundaryLayer<Dim, Nodes> insert_boundary_layer(const Mesh<Simplex<Dim>, Nodes>&
     return c;
   };
   // The curve a wall-border edge (a, b) lies on, by the rule elevate.hpp
-  // classifies edges with (SubEntityClassifier::common_curve): both ends on
-  // one curve; one on a curve and the other on a model vertex bounding it
-  // (the edge at the end of a wing's leading or trailing edge line, where it
-  // meets a box face); both on model vertices bounding one curve only.
-  // Without it such a midpoint was fixed where it lies, and its high-order
-  // edge nodes stayed on the chord at (d) while the layer above curved.
-  auto bounds = [&](EntityId curve, int point) {
-    const Entity* en = linear.find_entity(curve);
-    if (!en) return false;
-    for (int b : en->boundary)
-      if (std::abs(b) == point) return true;
-    return false;
-  };
+  // classifies edges with (detail::common_curve), which covers the edge at
+  // the end of a wing's leading or trailing edge line, where it meets a box
+  // face. Without it such a midpoint was fixed where it lies, and its
+  // high-order edge nodes stayed on the chord at (d) while the layer above curved.
   auto border_curve = [&](int a, int b) -> std::optional<EntityId> {
     if constexpr (Dim != 3) return std::nullopt;
-    const auto& ca = linear.node_class(a).entity;
-    const auto& cb = linear.node_class(b).entity;
-    if (!ca || !cb) return std::nullopt;
-    if (ca->dim == 1 && cb->dim == 1) return ca == cb ? ca : std::nullopt;
-    if (ca->dim == 1 && cb->dim == 0) return bounds(*ca, cb->tag) ? ca : std::nullopt;
-    if (ca->dim == 0 && cb->dim == 1) return bounds(*cb, ca->tag) ? cb : std::nullopt;
-    if (ca->dim == 0 && cb->dim == 0) {
-      std::optional<EntityId> found;
-      for (const auto& en : linear.entities())
-        if (en.id.dim == 1 && bounds(en.id, ca->tag) && bounds(en.id, cb->tag)) {
-          if (found) return std::nullopt;  // ambiguous
-          found = en.id;
-        }
-      return found;
-    }
-    return std::nullopt;
+    return detail::common_curve(linear, a, b);
   };
   for (int s = 0; s < S; ++s) {
     const Site& site = sites[s];

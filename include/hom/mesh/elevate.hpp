@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "hom/basis/lagrange.hpp"
+#include "hom/mesh/detail/edge_curve.hpp"
 #include "hom/mesh/detail/site_key.hpp"
 #include "hom/mesh/mesh.hpp"
 #include "hom/mesh/topology.hpp"
@@ -127,34 +128,8 @@ class SubEntityClassifier {
     return c;
   }
 
-  // The curve (dimension-1 entity) an edge between vertices a and b lies on,
-  // from the vertices' classification or the model's curve boundaries.
-  std::optional<EntityId> common_curve(int a, int b) const {
-    const auto& ca = mesh_.node_class(a).entity;
-    const auto& cb = mesh_.node_class(b).entity;
-    if (!ca || !cb) return std::nullopt;
-    if (ca->dim == 1 && cb->dim == 1) return ca == cb ? ca : std::nullopt;
-    if (ca->dim == 1 && cb->dim == 0) return bounds(*ca, cb->tag) ? ca : std::nullopt;
-    if (ca->dim == 0 && cb->dim == 1) return bounds(*cb, ca->tag) ? cb : std::nullopt;
-    if (ca->dim == 0 && cb->dim == 0) {
-      std::optional<EntityId> found;
-      for (const auto& en : mesh_.entities())
-        if (en.id.dim == 1 && bounds(en.id, ca->tag) && bounds(en.id, cb->tag)) {
-          if (found) return std::nullopt;  // ambiguous
-          found = en.id;
-        }
-      return found;
-    }
-    return std::nullopt;
-  }
-
-  bool bounds(EntityId curve, int point) const {
-    const Entity* en = mesh_.find_entity(curve);
-    if (!en) return false;
-    for (int b : en->boundary)
-      if (std::abs(b) == point) return true;
-    return false;
-  }
+  // The curve (dimension-1 entity) an edge between vertices a and b lies on.
+  std::optional<EntityId> common_curve(int a, int b) const { return detail::common_curve(mesh_, a, b); }
 
   const MeshT& mesh_;
   Map classified_;
