@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "gmsh_peer.hpp"
 #include "hom/measure/shape_measure.hpp"
@@ -97,6 +98,21 @@ TEST_CASE("gmsh peer: a tangled p = 2 cube comes back with its nodes, fixed ones
   CHECK(std::isfinite(q.mean));
   CHECK(q.min >= 0.0);
   CHECK(q.max <= 1.0 + 1e-12);
+}
+
+TEST_CASE("gmsh peer: the peak memory reported is the child's, not the caller's") {
+  // The caller holds 600 MB resident while Gmsh runs; a spawned child starts
+  // in the caller's address space, so wait4's ru_maxrss would count them.
+  std::vector<char> ballast(600u << 20);
+  for (std::size_t i = 0; i < ballast.size(); i += 4096) ballast[i] = char(i);
+  meshing::GmshPeerOptions o;
+  o.time_limit_s = 60;
+  const auto r = meshing::gmsh_high_order_optimize(tangled_cube(), o);
+  INFO("status: " << r.status << ", peak " << r.peak_rss_mb << " MB");
+  REQUIRE(r.finished);
+  CHECK(r.peak_rss_mb > 1.0);
+  CHECK(r.peak_rss_mb < 400.0);  // Gmsh on 162 degree-2 elements: tens of MB
+  CHECK(ballast[4096] == char(4096));
 }
 
 TEST_CASE("gmsh peer: a run over its time limit is killed and reported") {

@@ -31,6 +31,7 @@
 
 #include "hom/io/msh.hpp"
 #include "hom/nodes/equispaced.hpp"
+#include "proc_memory.hpp"
 
 extern char** environ;
 
@@ -236,7 +237,12 @@ PeerResult gmsh_high_order_optimize(const TetMesh& perturbed, const GmshPeerOpti
     rusage usage{};
     bool timed_out = false;
     auto nap = std::chrono::milliseconds(5);
+    // The child's own peak memory, polled (a killed child writes no info
+    // file); not ru_maxrss, which counts the parent's memory (proc_memory.hpp).
+    const std::string child_status = "/proc/" + std::to_string(pid) + "/status";
+    long peak_kb = 0;
     for (;;) {
+      peak_kb = std::max(peak_kb, proc_peak_rss_kb(child_status));
       const pid_t w = wait4(pid, &wstatus, WNOHANG, &usage);
       if (w == pid) break;
       if (w < 0 && errno != EINTR) return fail(std::string("waitpid: ") + std::strerror(errno));
@@ -252,12 +258,13 @@ PeerResult gmsh_high_order_optimize(const TetMesh& perturbed, const GmshPeerOpti
     }
     r.wall_s = seconds(t0, Clock::now());
     r.time_s = r.wall_s;
-    r.peak_rss_mb = double(usage.ru_maxrss) / 1024.0;  // Linux: kilobytes
     r.cpu_s = double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) + 1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 
     const auto info = read_info(info_path);
     if (auto it = info.find("version"); it != info.end()) r.version = it->second;
     if (auto it = info.find("note"); it != info.end()) r.note = it->second;
+    if (auto it = info.find("peak_rss_kb"); it != info.end()) peak_kb = std::max(peak_kb, std::stol(it->second));
+    r.peak_rss_mb = double(peak_kb) / 1024.0;
     if (timed_out) {
       r.status = "timeout";
       if (const auto last = log_tail(log); !last.empty()) r.note = "last message: " + last;  // how far Gmsh got

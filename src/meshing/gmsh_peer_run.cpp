@@ -14,8 +14,9 @@
 // lets nodes on curves and surfaces slide; only nodes on points stay).
 // Boundary triangles are left out: with Mesh.HighOrderDistCAD off the
 // optimizer does not use them. OUT is IN with Gmsh's node coordinates. INFO
-// gets "version V" once Gmsh is up, then "optimize_s T", "note MESSAGE" (the
-// last error Gmsh reported, if any) and "done", or "error MESSAGE".
+// gets "version V" once Gmsh is up, then "optimize_s T", "peak_rss_kb K" (this
+// process's VmHWM), "note MESSAGE" (the last error Gmsh reported, if any) and
+// "done", or "error MESSAGE".
 // Exit status: 0 done, 2 bad arguments, 3 error.
 
 #include <sys/prctl.h>
@@ -32,6 +33,7 @@
 
 #include "hom/io/msh_reader.hpp"
 #include "hom/io/msh_writer.hpp"
+#include "proc_memory.hpp"
 
 namespace {
 
@@ -187,6 +189,8 @@ int run(const Args& a) {
   gmsh::finalize();
 
   info_line(a.info, "optimize_s " + std::to_string(optimize_s));
+  if (const long kb = hom::meshing::proc_peak_rss_kb("/proc/self/status"); kb >= 0)
+    info_line(a.info, "peak_rss_kb " + std::to_string(kb));
   if (!note.empty()) info_line(a.info, "note " + note);
   info_line(a.info, "done");
   return 0;
