@@ -219,6 +219,32 @@ void check_untangles(int n, int p, double amplitude, SolverKind kind, unsigned s
 
 }  // namespace
 
+TEST_CASE_TEMPLATE("the assembled Newton counts its Hessian's entries and refuses a problem beyond its memory", F,
+                   Simplex<2>, Cube<3>) {
+  auto mesh = box_mesh<F>(2, 3);
+  perturb(mesh, 0.3 / 6, 31);
+  auto problem = make_problem(mesh, make_ideal_mesh(mesh, IdealKind::straight_sided));
+  Eigen::VectorXd g;
+  typename decltype(problem)::SparseMatrix H;
+  problem.hessian(problem.coordinates(), HessianForm::projected, g, H);
+  // The count made without the pattern is the assembled matrix's.
+  CHECK(problem.hessian_nonzeros() == H.nonZeros());
+  CHECK(problem.hessian_nonzeros() < std::int64_t(problem.num_dofs()) * problem.num_dofs());
+
+  const auto start = problem.coordinates();
+  NewtonSolver newton;
+  const double needed = NewtonSolver::memory_needed_bytes(problem.hessian_nonzeros(), problem.hessian_pattern_extra_bytes());
+  CHECK(needed > 36.0 * double(H.nonZeros()));
+  newton.memory_limit_bytes = 0.5 * needed;
+  SolverOptions options;
+  options.max_iterations = 5;
+  CHECK_THROWS_WITH_AS(newton.solve(problem, options), doctest::Contains("nonzeros over"), std::runtime_error);
+  CHECK(problem.coordinates() == start);  // refused before any step
+  newton.memory_limit_bytes = 2.0 * needed;
+  CHECK_NOTHROW(newton.solve(problem, options));
+  CHECK(problem.coordinates() != start);
+}
+
 TEST_CASE_TEMPLATE("every solver untangles a perturbed planar mesh and recovers its ideal", F, Simplex<2>, Cube<2>) {
   for (int p = 2; p <= 4; ++p)
     for (SolverKind kind : all_solvers) check_untangles<F>(3, p, 0.45, kind, 100 + p);

@@ -23,8 +23,20 @@
 ///     it when SuiteSparse is found), Eigen::SimplicialLDLT otherwise; the
 ///     pattern is analysed once per solve. (On 1512 degree-2 tetrahedra the
 ///     simplicial factorization took 40% of the solve.)
+///   - Memory: the matrix is kept three times (the cached pattern, H_k and the
+///     shifted copy that is factorized), 12 bytes per stored entry each, and
+///     the factor holds at least half as many entries again. Before assembling
+///     anything the solver counts the entries and refuses (std::runtime_error)
+///     a problem that needs more than the memory available; with CHOLMOD it
+///     checks the factor's predicted size again after the symbolic analysis.
+///     (Table 4.1 at p = 10 would need tens of GB: the matrix-free solver is
+///     the one for it.)
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 
 #include <Eigen/Sparse>
@@ -33,6 +45,7 @@
 #include <Eigen/CholmodSupport>
 #endif
 
+#include "hom/detail/available_memory.hpp"
 #include "hom/optimize/problem.hpp"
 #include "hom/optimize/solver.hpp"
 
@@ -72,15 +85,42 @@ struct NewtonSolver {
   double max_shift = 1e10;  ///< give up (line search failed) beyond this mu
   int backtracks_to_increase_shift = 3;  ///< an accepted step this short raises mu
   LineSearch line_search{};
+  /// Bytes the solver may use; <= 0: the system's available memory, read when
+  /// solve starts (no check where the system does not say).
+  double memory_limit_bytes = 0.0;
+
+  /// Lower bound of the bytes the assembled solve needs (see the file comment).
+  static double memory_needed_bytes(std::int64_t nonzeros, std::int64_t pattern_extra_bytes) {
+    const double per_entry = 3.0 * (sizeof(double) + sizeof(int)) + 0.5 * sizeof(double);
+    return per_entry * double(nonzeros) + double(pattern_extra_bytes);
+  }
 
   template <AssembledProblem Problem>
   SolverResult solve(Problem& problem, const SolverOptions& options) const {
+    if constexpr (requires { problem.hessian_nonzeros(); problem.hessian_pattern_extra_bytes(); }) {
+      const std::int64_t nonzeros = problem.hessian_nonzeros();
+      refuse_beyond_memory(memory_needed_bytes(nonzeros, problem.hessian_pattern_extra_bytes()),
+                           std::to_string(nonzeros) + " nonzeros over " + std::to_string(problem.num_dofs()) +
+                               " free coordinates");
+    }
     Step<Problem> step(*this);
     const detail::SerialEigenScope serial_eigen;
     return detail::run_outer_loop(problem, options, name, step);
   }
 
  private:
+  double memory_limit() const { return memory_limit_bytes > 0.0 ? memory_limit_bytes : detail::available_memory_bytes(); }
+
+  /// Throws when `needed` bytes exceed the limit; `what` says what needs them.
+  void refuse_beyond_memory(double needed, const std::string& what) const {
+    const double limit = memory_limit();
+    if (limit <= 0.0 || needed <= limit) return;
+    char sizes[96];
+    std::snprintf(sizes, sizeof sizes, "at least %.2f GB, more than the %.2f GB available", needed / 1e9, limit / 1e9);
+    throw std::runtime_error("solver newton: the assembled Hessian (" + what + ") needs " + sizes +
+                             "; use the matrix-free solver (matrix-free), which stores no matrix");
+  }
+
   template <class Problem>
   struct Step {
     explicit Step(const NewtonSolver& solver) : s(solver) {}
@@ -119,6 +159,11 @@ struct NewtonSolver {
 #endif
           chol.analyzePattern(A);
           analysed = true;
+#if defined(HOM_HAVE_CHOLMOD)
+          // The symbolic analysis predicts the factor's entries (fill-in included).
+          s.refuse_beyond_memory(chol.cholmod().lnz * sizeof(double),
+                                 "its Cholesky factor of " + std::to_string(std::int64_t(chol.cholmod().lnz)) + " entries");
+#endif
         }
         chol.factorize(A);
         if (!positive_definite()) continue;

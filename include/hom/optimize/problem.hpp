@@ -44,6 +44,7 @@
 /// several threads at once (it caches the Hessian's sparsity pattern).
 
 #include <algorithm>
+#include <cstdint>
 #include <numeric>
 #include <cmath>
 #include <limits>
@@ -177,6 +178,34 @@ class OptimizationProblem {
   int nodes_per_element() const { return int(elements_.rows()); }
   int num_free_nodes() const { return int(free_nodes_.size()); }
   int num_dofs() const { return dim * num_free_nodes(); }
+
+  /// Stored entries of the assembled Hessian (full symmetric storage): dim^2
+  /// for every ordered pair of free nodes that share an element. Counted
+  /// without building the pattern, so that NewtonSolver can refuse a problem
+  /// whose matrix would not fit in memory before allocating it (at p = 10 a
+  /// node inside a tetrahedron couples with all 286 of its nodes).
+  std::int64_t hessian_nonzeros() const {
+    const int n = nodes_per_element();
+    std::vector<int> seen_by(num_free_nodes(), -1);
+    std::int64_t pairs = 0;
+    for (int k = 0; k < num_free_nodes(); ++k)
+      for (const auto& inc : incidences(free_nodes_[k]))
+        for (int i = 0; i < n; ++i) {
+          const int fi = free_index_[elements_(i, inc.element)];
+          if (fi >= 0 && seen_by[fi] != k) {
+            seen_by[fi] = k;
+            ++pairs;
+          }
+        }
+    return pairs * dim * dim;
+  }
+
+  /// Bytes the cached Hessian pattern keeps besides its matrix: every
+  /// element's n x n table of positions in the matrix's columns.
+  std::int64_t hessian_pattern_extra_bytes() const {
+    const std::int64_t n = nodes_per_element();
+    return std::int64_t(num_elements()) * n * n * std::int64_t(sizeof(int));
+  }
 
   const Tabulation<Family>& tabulation() const { return *tab_; }
   const Measure& measure() const { return measure_; }
