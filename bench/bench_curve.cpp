@@ -41,10 +41,11 @@
 /// quadrature points, as `hom curve --certify`; the validity claim then also
 /// needs the certificate). Without it a fold at a node that no quadrature
 /// point sees fails the "det > 0 at the nodes" claim: plate_tri at p = 7
-/// (13 elements certified invalid, all repaired) and plate_quad at p = 3 (two
-/// quadrilaterals whose folded corner is fixed by boundary nodes alone: two
-/// edges on the CAD meet there, a defect of the linear mesh no node movement
-/// mends).
+/// (13 elements certified invalid, all repaired). plate_quad at p = 3 used to
+/// fail with two quadrilaterals whose two edges at a corner lie on one CAD
+/// curve (det = 0 there whatever the free nodes do); the quad mesher now
+/// splits such "ears" (src/cad/quad_ears.hpp), and plate_quad's 708
+/// quadrilaterals are certified valid at p = 3 and 4.
 ///
 /// Exit status: 0 when every case gives a valid mesh, 1 when a case is
 /// invalid or fails (the error is printed and recorded), 2 on bad options.

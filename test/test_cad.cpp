@@ -8,10 +8,12 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <random>
 #include <set>
@@ -19,6 +21,7 @@
 
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
+#include "quad_ears.hpp"
 #include "hom/geometry/cylinder.hpp"
 #include "hom/geometry/plane.hpp"
 #include "hom/geometry/sphere.hpp"
@@ -576,6 +579,79 @@ TEST_CASE("surface meshes of the NURBS sphere: triangles and quadrilaterals on t
   };
   check(cad::mesh_cad<Simplex<2>, WarpBlend, 3>(m, o));
   check(cad::mesh_cad<Cube<2>, GaussLobatto, 3>(m, o));
+}
+
+TEST_CASE("a quadrilateral ear (two edges on one curve at a corner) is split into five, conforming, same winding") {
+  // Face 1 is the plane z = 0 with (u, v) = (x, y); curve 1 runs along y = 0.
+  // Quad A = (0,0) (1,0) (0,1) (-1,0) has both edges at (0,0) on curve 1: an
+  // ear. Quad B = (1,0) (2,0) (2,1) (0,1) shares A's edge (1,0)-(0,1) and has
+  // one edge on the curve: not an ear.
+  io::MshData d;
+  const std::vector<std::array<double, 3>> x = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {2, 0, 0}, {2, 1, 0}};
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    io::MshNode n;
+    n.tag = std::int64_t(i) + 1;
+    n.x = x[i];
+    const bool on_curve = x[i][1] == 0.0;
+    n.entity = EntityId{on_curve ? 1 : 2, 1};
+    n.num_params = on_curve ? 1 : 2;
+    n.params = {x[i][0], x[i][1], 0.0};
+    d.nodes.push_back(n);
+  }
+  auto add = [&](int type, int dim, std::vector<std::int64_t> nodes) {
+    io::MshElement e;
+    e.tag = std::int64_t(d.elements.size()) + 1;
+    e.type = type;
+    e.entity = {dim, 1};
+    e.first = d.element_nodes.size();
+    e.num_nodes = int(nodes.size());
+    d.element_nodes.insert(d.element_nodes.end(), nodes.begin(), nodes.end());
+    d.elements.push_back(e);
+  };
+  for (auto [a, b] : {std::pair{4, 1}, std::pair{1, 2}, std::pair{2, 5}}) add(1, 1, {a, b});
+  add(3, 2, {1, 2, 3, 4});
+  add(3, 2, {2, 5, 6, 3});
+  const cad::FaceGeometry plane{[](int, const Eigen::Vector3d& p) { return Eigen::Vector2d(p.x(), p.y()); },
+                                [](int, const Eigen::Vector2d& uv) { return Eigen::Vector3d(uv.x(), uv.y(), 0.0); }};
+  CHECK(cad::split_quad_ears(d, plane) == 1);
+  CHECK(d.nodes.size() == 10);
+  std::map<std::int64_t, Eigen::Vector2d> at;
+  for (const auto& n : d.nodes) at[n.tag] = Eigen::Vector2d(n.x[0], n.x[1]);
+  int quads = 0, at_ear_corner = 0;
+  std::map<std::pair<std::int64_t, std::int64_t>, int> edge_uses;
+  for (const auto& e : d.elements) {
+    if (e.type != 3) continue;
+    ++quads;
+    const auto n = d.nodes_of(e);
+    double twice_area = 0.0;  // shoelace: positive for the input's counter-clockwise winding
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector2d a = at.at(n[i]), b = at.at(n[(i + 1) % 4]);
+      twice_area += a.x() * b.y() - a.y() * b.x();
+      ++edge_uses[{std::min(n[i], n[(i + 1) % 4]), std::max(n[i], n[(i + 1) % 4])}];
+      // Each element's corners are strictly convex.
+      const Eigen::Vector2d c = at.at(n[(i + 2) % 4]);
+      CHECK((b - a).x() * (c - b).y() - (b - a).y() * (c - b).x() > 0.0);
+    }
+    CHECK(twice_area > 0.0);
+    if (std::find(n.begin(), n.end(), 1) != n.end()) ++at_ear_corner;
+  }
+  CHECK(quads == 6);          // B and the five of A
+  CHECK(at_ear_corner == 2);  // the ear's corner now has two elements
+  // Conforming: every edge is used by one element (boundary) or two.
+  int boundary = 0;
+  for (const auto& [edge, uses] : edge_uses) {
+    CHECK(uses <= 2);
+    boundary += uses == 1;
+  }
+  CHECK(boundary == 6);  // the outline of A and B is unchanged: 6 edges
+  for (const auto& n : d.nodes)
+    if (n.tag > 6) {
+      REQUIRE(n.entity);
+      CHECK(n.entity->dim == 2);
+      CHECK(n.num_params == 2);
+      CHECK(n.params[0] == doctest::Approx(n.x[0]));
+    }
+  CHECK(cad::split_quad_ears(d, plane) == 0);  // nothing left to split
 }
 
 TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
