@@ -513,13 +513,20 @@ TEST_CASE("boundary layer pipeline: a coarse curved wall meeting side planes (a 
   REQUIRE(r.stages.size() >= 3);
   CHECK(r.stages[2].quality.inverted == 0);  // was 4: transitions over the border midpoints
   REQUIRE_FALSE(r.stopped_after_smoothing);
-  // Every stage runs and the result has no inverted element, but it is not
-  // valid yet: two transition elements at the border, 6 of whose 10 nodes
-  // are held on the side planes, keep det < 0 at a node (min scaled Jacobian
-  // -0.044), which the optimizer's quadrature points do not see and the
-  // certify-and-repair stage, moving free nodes only, cannot mend (issue 9).
-  check_pipeline<3>(r, in, o, /*expect_valid=*/false);
-  CHECK(r.stages[4].scaled_jacobian.min > -0.1);
+  // Valid: det > 0 at every node too. Without the side planes optimized on
+  // their surfaces at the start of (e), two transition elements at the
+  // border, 6 of whose 10 nodes the volume optimizer holds on the planes,
+  // keep det < 0 at a node (min scaled Jacobian -0.044), which no
+  // quadrature point sees.
+  check_pipeline<3>(r, in, o);
+  CHECK(r.stages[4].scaled_jacobian.min > 0.0);
+  CHECK(r.boundary_face_iterations > 0);
+  auto held = o;
+  held.optimize_side_faces = false;
+  const auto rh = hom::boundary_layer_pipeline<3>(in, {wall}, g, held);
+  check_pipeline<3>(rh, in, held, /*expect_valid=*/false);
+  CHECK(rh.stages[4].scaled_jacobian.min < 0.0);
+  CHECK(rh.boundary_face_iterations == 0);
   // The wall-border midpoints are on the arcs, and so is every final node of
   // the wall's boundary facets.
   for (int n : r.layer.wall_nodes) {

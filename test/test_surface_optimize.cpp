@@ -35,6 +35,7 @@
 #include "hom/optimize/mesh_problem.hpp"
 #include "hom/optimize/newton.hpp"
 #include "hom/quadrature/quadrature_policy.hpp"
+#include "hom/surface/optimize_boundary_face.hpp"
 #include "hom/surface/optimize_surface.hpp"
 #include "hom/surface/surface_mesh_quality.hpp"
 #include "hom/surface/surface_problem.hpp"
@@ -390,4 +391,50 @@ TEST_CASE_TEMPLATE("independence of the parameterization (proposition 5.2): phi^
     MESSAGE((wave ? "Sigma_2" : "Sigma_1") << ", " << F::name << " p = " << p << ": E = " << E);
     CHECK(E <= 1e-3);
   }
+}
+
+TEST_CASE("optimize_boundary_face: a volume mesh's face folded in its plane is repaired on it, nothing else moves") {
+  // The unit box of Kuhn tetrahedra at p = 3; its face z = 0 is entity
+  // {2, 5} (structured.hpp). The nodes inside that face are moved in the
+  // plane until some of its triangles fold; the face's optimum is the
+  // unmoved mesh (f = 0), whichever way the plane's normal points (the
+  // facets turn outward, -z: with +z they are mirrored for the optimizer).
+  const int p = 3, n = 2;
+  const auto start = elevate(structured_mesh<Simplex<3>, WarpBlend>({n, n, n}), p);
+  const double spacing = 1.0 / (n * p);
+  for (const Eigen::Vector3d normal : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, -1)}) {
+    auto mesh = start;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-0.6 * spacing, 0.6 * spacing);
+    std::vector<int> moved;
+    for (int i = 0; i < mesh.num_nodes(); ++i) {
+      const auto& c = mesh.node_class(i);
+      if (c.entity && c.entity->dim == 2 && c.entity->tag == 5) {
+        mesh.node(i) += Eigen::Vector3d(u(rng), u(rng), 0.0);
+        moved.push_back(i);
+      }
+    }
+    REQUIRE(!moved.empty());
+    OptimizeOptions o;
+    o.max_iterations = 200;
+    o.gradient_tolerance = 1e-10;
+    o.objective_tolerance = 1e-14;
+    o.quality_tolerance = 1e-12;
+    o.threads = 1;
+    const auto r = optimize_boundary_face(mesh, 5, Plane(Eigen::Vector3d::Zero(), normal), o);
+    REQUIRE(r);
+    CHECK(r->result.initial_inverted > 0);
+    CHECK(r->inverted() == 0);
+    double back = 0.0;
+    for (int i : moved) {
+      CHECK(std::abs(mesh.node(i).z()) < 1e-14);
+      back = std::max(back, (mesh.node(i) - start.node(i)).norm());
+    }
+    CHECK(back < 1e-2 * spacing);  // the degenerate minimum: f ~ |x - x*|^4
+    for (int i = 0; i < mesh.num_nodes(); ++i)
+      if (std::find(moved.begin(), moved.end(), i) == moved.end()) CHECK(mesh.node(i) == start.node(i));
+  }
+  // A face without free nodes, or without facets, is left alone.
+  auto mesh = start;
+  CHECK_FALSE(optimize_boundary_face(mesh, 99, Plane(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 1)), OptimizeOptions{}));
 }

@@ -25,7 +25,11 @@
 ///                   measured against
 ///                   the straight-sided (c): "the ideal mesh is represented by
 ///                   the viscous linear mesh";
-///   (e) "optimized" (d) smoothed and untangled against the same ideal;
+///   (e) "optimized" in 3D, the nodes on the non-wall faces that the
+///                   geometry has (the box faces a wing section meets)
+///                   first optimized on their surfaces (chapter 5, the
+///                   faces' edges held), then (d) smoothed and untangled
+///                   against the same ideal;
 ///                   with high_order_optimize.certify, every element is then
 ///                   certified (Bernstein bounds) and the uncertified ones
 ///                   repaired (optimize/certified.hpp), the wall held.
@@ -56,6 +60,7 @@
 /// This sits in optimize/ because it drives the optimizer; it needs only
 /// the header-only core (Eigen).
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 #include <optional>
@@ -74,6 +79,7 @@
 #include "hom/quadrature/quadrature_policy.hpp"
 #include "hom/quality/mesh_quality.hpp"
 #include "hom/quality/statistics.hpp"
+#include "hom/surface/optimize_boundary_face.hpp"
 
 namespace hom {
 
@@ -91,6 +97,13 @@ struct BoundaryLayerPipelineOptions {
   /// Stop after (c) when the smoothed linear mesh still has inverted
   /// elements (file comment); off runs (d) and (e) whatever (c) left.
   bool stop_if_smoothed_invalid = true;
+  /// 3D, at the start of (e): optimize the nodes on every non-wall boundary
+  /// face that `geometry` has a surface for on that surface (chapter 5,
+  /// surface/optimize_boundary_face.hpp), the face's edges held. The layer's
+  /// triangles on the box faces a wing section meets are curved along the
+  /// wall's border; the volume optimizer holds them, so one folded in its
+  /// plane would leave its tetrahedron inverted at that node.
+  bool optimize_side_faces = true;
   /// Called after each stage with its name, e.g. to print progress.
   std::function<void(const std::string&)> progress;
 };
@@ -125,6 +138,9 @@ struct BoundaryLayerPipelineResult {
   /// (the stage's statistics are of the repaired mesh).
   std::optional<CertificationOutcome> certification;
   double time_s = 0.0;        ///< stages (b) to (e)
+  /// Surface-optimizer iterations on the non-wall faces at the start of (e)
+  /// (3D: BoundaryLayerPipelineOptions::optimize_side_faces).
+  int boundary_face_iterations = 0;
 
   /// What the last stage's quality is measured against: the smoothed linear
   /// mesh (straight-sided) after (e), the stretched layer ideal after (c).
@@ -300,6 +316,27 @@ inline void record_optimization(BoundaryLayerStage& s, const OptimizeResult& r) 
   s.stop_reason = std::string(to_string(r.result.reason));
 }
 
+/// BoundaryLayerPipelineOptions::optimize_side_faces: returns the surface
+/// optimizer's iterations over all faces.
+inline int optimize_side_faces(Mesh<Simplex<3>>& mesh, const std::vector<int>& walls, const GeometryModel<3>& geometry,
+                               const BoundaryLayerPipelineOptions& options) {
+  if (!options.optimize_side_faces) return 0;
+  std::vector<int> faces;
+  for (const auto& f : mesh.boundary_facets())
+    if (std::find(walls.begin(), walls.end(), f.entity_tag) == walls.end() && geometry.surface(f.entity_tag) &&
+        std::find(faces.begin(), faces.end(), f.entity_tag) == faces.end())
+      faces.push_back(f.entity_tag);
+  OptimizeOptions o;
+  o.solver = SolverKind::newton;
+  o.threads = options.high_order_optimize.threads;
+  o.max_iterations = options.high_order_optimize.max_iterations;
+  o.verbose = options.high_order_optimize.verbose;
+  int iterations = 0;
+  for (int f : faces)
+    if (const auto r = optimize_boundary_face(mesh, f, *geometry.surface(f), o)) iterations += r->result.iterations;
+  return iterations;
+}
+
 }  // namespace detail
 
 /// Runs stages (a)-(e) (file comment). `geometry` holds the wall's analytic
@@ -360,10 +397,15 @@ BoundaryLayerPipelineResult<Dim> boundary_layer_pipeline(const Mesh<Simplex<Dim>
   out.stages.back().time_s = curve_s;
   progress(out.stages.back());
 
-  // (e)
+  // (e): first the faces the layer meets besides the wall, on their surfaces
+  // (chapter 5; their nodes are held in the volume), then the volume.
+  t = Clock::now();
+  if constexpr (Dim == 3) out.boundary_face_iterations = detail::optimize_side_faces(out.mesh, wall_tags, geometry, options);
+  const double faces_s = seconds_since(t);
   const auto re = optimize(out.mesh, linear_ideal, options.high_order_optimize);
   out.stages.push_back(detail::measure_stage(out.mesh, linear_ideal, "optimized", "smoothed-linear"));
   detail::record_optimization(out.stages.back(), re);
+  out.stages.back().time_s += faces_s;
   out.certification = re.certification;
   progress(out.stages.back());
 
