@@ -28,7 +28,10 @@
 ///               (8 elements at the two border ends in our measurements).
 ///               The quick NACA 0012 wing gets through every stage (its
 ///               leading edge's stacks at the border are isoparametric,
-///               boundary_layer.hpp) but ends with det < 0 at a node;
+///               boundary_layer.hpp) but ends with det < 0 at a node
+///               (min scaled Jacobian -0.141, level-0 elements with a facet
+///               on the box faces, after those faces' 14 + 14 triangles
+///               folded in their planes were unfolded at the start of (e));
 ///   stretching  first-layer heights giving aspect ratios about 1:10^2,
 ///               1:10^4, 1:10^6 and 1:10^8 on a 2D quarter annulus (inner
 ///               circle of diameter 1 as the wall, Circle<2>), p = 2 and 4:
