@@ -185,6 +185,7 @@ class OptimizationProblem {
   /// whose matrix would not fit in memory before allocating it (at p = 10 a
   /// node inside a tetrahedron couples with all 286 of its nodes).
   std::int64_t hessian_nonzeros() const {
+    if (pattern_) return pattern_->matrix.nonZeros();  // built already: no need to count
     const int n = nodes_per_element();
     std::vector<int> seen_by(num_free_nodes(), -1);
     std::int64_t pairs = 0;
