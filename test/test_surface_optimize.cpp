@@ -402,7 +402,7 @@ TEST_CASE("optimize_boundary_face: a volume mesh's face folded in its plane is r
   const int p = 3, n = 2;
   const auto start = elevate(structured_mesh<Simplex<3>, WarpBlend>({n, n, n}), p);
   const double spacing = 1.0 / (n * p);
-  for (const Eigen::Vector3d normal : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, -1)}) {
+  for (const Eigen::Vector3d& normal : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, -1)}) {
     auto mesh = start;
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-0.6 * spacing, 0.6 * spacing);
@@ -437,4 +437,83 @@ TEST_CASE("optimize_boundary_face: a volume mesh's face folded in its plane is r
   // A face without free nodes, or without facets, is left alone.
   auto mesh = start;
   CHECK_FALSE(optimize_boundary_face(mesh, 99, Plane(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 1)), OptimizeOptions{}));
+}
+
+TEST_CASE_TEMPLATE("p-continuation on a surface: the linear sub-problem on z = 0 is the planar one", C, HOM_SURFACE_CASES) {
+  using F = typename C::Family;
+  using N = typename C::Nodes;
+  const Plane plane(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX());
+  for (int p = 2; p <= 4; ++p) {
+    CAPTURE(p);
+    auto mesh = box_mesh<F, N>(2, p, 0.0, 2.0);
+    const auto free = free_node_mask(mesh);
+    UVs U = mesh.nodes();
+    perturb(U, free, 0.9 / p, 11 + p);  // up to 0.9 of the node spacing: some sub-elements tangle
+    mesh.nodes() = U;
+    const IdealMesh<F> ideal = IdealMesh<F>::regular(mesh.num_elements());
+    auto planar = make_linear_sub_problem(mesh, ideal);
+    const std::vector<SurfaceIdealVertices<F>> ideals(mesh.num_elements(), embed_ideal<F>(regular_ideal_vertices<F>()));
+    auto surface = make_linear_sub_surface_problem<F, N>(p, plane, U, mesh.elements(), free, ideals);
+    REQUIRE(surface.num_elements() == planar.num_elements());
+    CHECK(surface.num_elements() == mesh.num_elements() * p * p);
+    CHECK(surface.nodes_per_element() == F::num_vertices);
+    CHECK(surface.num_dofs() == planar.num_dofs());
+    CHECK(surface.elements() == planar.elements());
+    const MeshState s1 = planar.status(U), s2 = surface.status(U);
+    CHECK(s1.valid == s2.valid);
+    CHECK(s1.inverted > 0);  // the perturbation tangles some sub-elements
+    planar.update_regularization(s1);
+    surface.update_regularization(s2);
+    Eigen::VectorXd g1, g2;
+    const double f1 = planar.value_gradient(U, g1), f2 = surface.value_gradient(U, g2);
+    CHECK(f2 == doctest::Approx(f1).epsilon(1e-12));
+    CHECK((g1 - g2).norm() <= 1e-11 * std::max(1.0, g1.norm()));
+  }
+}
+
+TEST_CASE_TEMPLATE("p-continuation on a surface: a scrambled patch on a sphere reaches the unperturbed start's optimum", C,
+                   HOM_SURFACE_CASES) {
+  using F = typename C::Family;
+  using N = typename C::Nodes;
+  const Sphere sphere(Eigen::Vector3d::Zero(), 2.0);
+  const int p = 4;
+  const auto param = box_mesh<F, N>(3, p, -0.6, 0.6);
+  const std::vector<bool> free = free_node_mask(param);
+  // Ideals: the straight-sided elements through the vertices on the sphere.
+  Mesh<F, N, 3> straight(p, surface_points(sphere, param.nodes()), param.elements());
+  straight.reset_ideal();
+  const auto ideals = surface_ideals(straight, IdealKind::straight_sided);
+  // Every interior node moved by up to 0.45 of the node spacing: most elements tangled.
+  UVs scrambled = param.nodes();
+  perturb(scrambled, free, 0.45 * 1.2 / (3 * p), 21);
+  const auto& t = tab<F, N>(p);
+  OptimizeOptions o;
+  o.gradient_tolerance = 1e-10;
+  o.objective_tolerance = 1e-12;
+  o.stagnation_window = 0;
+
+  auto optimized = [&](const UVs& start, bool pcont, SurfaceOptimizeResult& r) {
+    Mesh<F, N, 3> mesh(p, surface_points(sphere, start), param.elements());
+    UVs uv = start;
+    OptimizeOptions oo = o;
+    oo.p_continuation = pcont;
+    r = optimize_surface(mesh, sphere, uv, ideals, oo);
+    return Eigen::Matrix3Xd(mesh.nodes());
+  };
+  {
+    auto before = make_surface_problem(t, sphere, scrambled, param.elements(), free, ideals);
+    CHECK(2 * before.status(scrambled).inverted > param.num_elements());
+  }
+  SurfaceOptimizeResult from_straight, from_scrambled;
+  const Eigen::Matrix3Xd x0 = optimized(param.nodes(), true, from_straight);
+  const Eigen::Matrix3Xd x1 = optimized(scrambled, true, from_scrambled);
+  CHECK_FALSE(from_straight.continuation.has_value());  // a valid sub-mesh: nothing to do
+  REQUIRE(from_scrambled.continuation.has_value());
+  CHECK(from_scrambled.continuation->inverted == 0);
+  CHECK(from_scrambled.inverted() == 0);
+  CHECK(from_scrambled.converged());
+  const double E = relative_distance<F>(x0, x1, free, param.elements());
+  CHECK(E <= 1e-6);
+  MESSAGE(F::name << " p = " << p << ": scrambled start, linear stage " << from_scrambled.continuation->iterations
+                  << " iterations, then " << from_scrambled.result.iterations << "; E = " << E);
 }

@@ -224,8 +224,9 @@ class Pipeline {
       say("surface, initial curved: " + row(initial) + " (" + fmt_s(since(t0)) + " to evaluate)");
       StageReport optimized = optimize_faces();
       out.stages.push_back(optimized);
-      say("surface, optimized (chapter 5, " + std::to_string(face_meshes_.size()) + " CAD faces): " + row(optimized) +
-          ", " + std::to_string(optimized.iterations) + " Newton iterations (" + fmt_s(optimized.time_s) + ")");
+      say("surface, optimized (chapter 5, " + std::to_string(face_meshes_.size()) + " CAD faces" +
+          (optimized.p_continuation ? ", p-continuation on the tangled ones" : "") + "): " + row(optimized) + ", " +
+          std::to_string(optimized.iterations) + " Newton iterations (" + fmt_s(optimized.time_s) + ")");
     }
     if constexpr (!surface) {
       // 4. Chapter 4 in the volume / planar domain.
@@ -772,6 +773,7 @@ class Pipeline {
   StageReport optimize_faces() {
     const auto t0 = Clock::now();
     int iterations = 0, not_converged = 0;
+    bool continued = false;
     std::string reason = "none";
     if (o_.optimize_surface) {
       for (auto& fm : face_meshes_) {
@@ -789,8 +791,13 @@ class Pipeline {
         for (int k = 0; k < fm.mesh.num_nodes(); ++k)
           if (free[k])
             for (int a = 0; a < 2; ++a) fm.uv(a, k) = s.range(a).normalize(fm.uv(a, k));
+        // p-continuation on the surface (appendix C, surface_continuation.hpp),
+        // with the domain stage's policy: automatic = when the face is tangled.
+        opt.p_continuation = o_.pcont == CurveOptions::Continuation::on ||
+                             (o_.pcont == CurveOptions::Continuation::automatic && face_tangled(fm));
         const auto r = hom::optimize_surface<Measure, DefaultExactness>(fm.mesh, s, fm.uv, opt, measure_);
-        iterations += r.result.iterations;
+        iterations += r.result.iterations + (r.continuation ? r.continuation->iterations : 0);
+        continued = continued || r.continuation.has_value();
         not_converged += !r.result.converged;
         reason = std::string(to_string(r.result.reason));
         for (int k = 0; k < fm.mesh.num_nodes(); ++k)
@@ -804,7 +811,16 @@ class Pipeline {
     r.solver = o_.optimize_surface ? "newton" : "none";
     r.stop_reason = reason;
     r.faces_not_converged = not_converged;
+    r.p_continuation = continued;
     return r;
+  }
+
+  /// Whether some element of the face mesh is invalid (against its
+  /// straight-sided counterpart, on its CAD surface).
+  bool face_tangled(const FacePatchMesh& fm) const {
+    const MeshQuality q = surface_mesh_quality(fm.mesh, surfaces_.at(fm.face), fm.uv, measure_, IdealKind::straight_sided,
+                                               face_rule());
+    return std::any_of(q.elements.begin(), q.elements.end(), [](const ElementQuality& e) { return !e.valid; });
   }
 
   // --- chapter 4 in the domain -------------------------------------------------

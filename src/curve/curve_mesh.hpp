@@ -23,7 +23,9 @@
 ///      mapped by the surface, then optimized on the surface, face by face,
 ///      with chapter 5's method (optimize_surface: parametric coordinates
 ///      as unknowns, ideal = the straight-sided element, the face's edges
-///      fixed). For a surface mesh this is the result;
+///      fixed), a tangled face after p-continuation on the surface (its
+///      linear sub-mesh untangled first, surface_continuation.hpp;
+///      CurveOptions::pcont). For a surface mesh this is the result;
 ///   4. a volume or planar mesh: the interior nodes optimized with chapter
 ///      4's method (hom::optimize) against the straight-sided ideal M_I with
 ///      every boundary node fixed (section 6.2.3), with p-continuation
@@ -73,8 +75,9 @@ struct CurveOptions {
   /// matrix-free, as `hom optimize`). Surfaces always use Newton (chapter 5).
   std::string solver = "auto";
   enum class Continuation { automatic, on, off };
-  /// p-continuation of the volume / planar stage: automatic = on when the
-  /// initial curved mesh has inverted elements.
+  /// p-continuation (appendix C) of the volume / planar stage and, per CAD
+  /// face, of the surface stage: automatic = on when the initial curved mesh
+  /// (the face) has inverted elements.
   Continuation pcont = Continuation::automatic;
   bool optimize_surface = true;     ///< chapter 5 stage on the boundary faces
   int surface_max_iterations = 50;  ///< per CAD face

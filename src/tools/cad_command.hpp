@@ -173,7 +173,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
           .set("threads", co.threads);
       if (!s.solver.empty()) c.set("solver", s.solver).set("stop_reason", s.stop_reason);
       if (s.part == "surface" && s.stage == "optimized") c.set("faces_not_converged", s.faces_not_converged);
-      if (s.stage == "optimized" && s.part != "surface") c.set("p_continuation", s.p_continuation);
+      if (s.stage == "optimized") c.set("p_continuation", s.p_continuation);
       cases.push_back(std::move(c));
     }
     if (!cases.empty()) {

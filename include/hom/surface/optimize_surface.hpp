@@ -14,11 +14,14 @@
 /// nodes neither classified fixed nor on a curve or point entity, and not on
 /// the mesh's topological boundary (the edges of the surface patch, whose
 /// nodes the thesis holds at their positions on the boundary curves).
-/// Options: hom::OptimizeOptions (solver must be newton, no p-continuation;
-/// ideal straight_sided = each element's snapshot vertices in R^3,
-/// Mesh::ideal_vertices, or regular = equilateral triangle / unit square).
+/// Options: hom::OptimizeOptions (solver must be newton; p_continuation runs
+/// the linear sub-mesh stage of appendix C on the surface first,
+/// surface_continuation.hpp; ideal straight_sided = each element's snapshot
+/// vertices in R^3, Mesh::ideal_vertices, or regular = equilateral triangle /
+/// unit square).
 
 #include <chrono>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -35,6 +38,7 @@
 #include "hom/optimize/solver.hpp"
 #include "hom/quadrature/quadrature_policy.hpp"
 #include "hom/quality/tabulation.hpp"
+#include "hom/surface/surface_continuation.hpp"
 #include "hom/surface/surface_mesh_quality.hpp"
 #include "hom/surface/surface_problem.hpp"
 
@@ -63,8 +67,9 @@ std::vector<SurfaceIdealVertices<Family>> surface_ideals(const Mesh<Family, Node
 }
 
 struct SurfaceOptimizeResult {
-  SolverResult result;
-  double time_s = 0.0;
+  SolverResult result;                      ///< the degree-p stage
+  std::optional<SolverResult> continuation;  ///< the linear sub-mesh stage, when it ran
+  double time_s = 0.0;                      ///< both stages
 
   bool converged() const { return result.converged; }
   int inverted() const { return result.inverted; }
@@ -80,8 +85,6 @@ SurfaceOptimizeResult optimize_surface(Mesh<Family, Nodes, 3>& mesh, const Surfa
                                        const OptimizeOptions& options = {}, const Measure& measure = {}) {
   if (options.solver != SolverKind::newton)
     throw std::invalid_argument("hom::optimize_surface: only the newton solver is available on surfaces");
-  if (options.p_continuation)
-    throw std::invalid_argument("hom::optimize_surface: p-continuation is not available on surfaces");
   if (uv.cols() != mesh.num_nodes())
     throw std::invalid_argument("hom::optimize_surface: " + std::to_string(uv.cols()) + " node parameters for " +
                                 std::to_string(mesh.num_nodes()) + " nodes");
@@ -93,9 +96,11 @@ SurfaceOptimizeResult optimize_surface(Mesh<Family, Nodes, 3>& mesh, const Surfa
   problem.set_threads(options.threads);
   problem.set_regularization_alpha(options.regularization_alpha);
   SolverOptions so = options.solver_options();
-  so.stage = "surface";
   SurfaceOptimizeResult out;
-  out.result = NewtonSolver{.hessian = options.hessian}.solve(problem, so);
+  const NewtonSolver newton{.hessian = options.hessian};
+  if (options.p_continuation) out.continuation = surface_linear_sub_mesh_continuation<Nodes, Q>(problem, ideals, so, newton);
+  so.stage = "surface";
+  out.result = newton.solve(problem, so);
   uv = problem.coordinates();
   mesh.nodes() = problem.physical_coordinates();
   for (int i = 0; i < mesh.num_nodes(); ++i) {
