@@ -179,16 +179,23 @@ TEST_CASE_TEMPLATE("certify: a corner fold that plain optimization leaves is rep
       for (int v = 0; v < F::num_vertices; ++v) CHECK(repaired.jacobian(e, F::vertex(v)).determinant() > 0.0);
     }
     // Local: with one round, only nodes of elements sharing a node with a
-    // failing element move (the normal stage is the same run).
+    // failing element move (the normal stage is the same run), or, when the
+    // round pulled its patch back towards the stage's start, of elements
+    // within pull_back_rings such rings.
     if (c.rounds == 1) {
-      std::set<int> touched, ring_nodes;
+      std::set<int> ring_nodes;
       for (int e : failing)
-        for (int i = 0; i < plain.nodes_per_element(); ++i) touched.insert(plain.elements()(i, e));
-      for (int e = 0; e < plain.num_elements(); ++e) {
-        bool ring = false;
-        for (int i = 0; i < plain.nodes_per_element(); ++i) ring = ring || touched.count(plain.elements()(i, e));
-        if (ring)
-          for (int i = 0; i < plain.nodes_per_element(); ++i) ring_nodes.insert(plain.elements()(i, e));
+        for (int i = 0; i < plain.nodes_per_element(); ++i) ring_nodes.insert(plain.elements()(i, e));
+      const int rings = c.pull_backs > 0 ? CertifyRepairOptions{}.pull_back_rings : 1;
+      for (int r = 0; r < rings; ++r) {
+        std::set<int> grown = ring_nodes;
+        for (int e = 0; e < plain.num_elements(); ++e) {
+          bool ring = false;
+          for (int i = 0; i < plain.nodes_per_element(); ++i) ring = ring || ring_nodes.count(plain.elements()(i, e));
+          if (ring)
+            for (int i = 0; i < plain.nodes_per_element(); ++i) grown.insert(plain.elements()(i, e));
+        }
+        ring_nodes = std::move(grown);
       }
       int moved = 0;
       for (int i = 0; i < plain.num_nodes(); ++i)
@@ -325,4 +332,52 @@ TEST_CASE_TEMPLATE("certify: an undecided element names its weakest point", F, S
   const auto valid = certify_element<F>(jacobian_bernstein<F, WarpBlend>(p), X, deep);
   CHECK(valid.status == Certificate::certified_valid);
   CHECK_FALSE(valid.weakest_point.has_value());
+}
+
+TEST_CASE_TEMPLATE("certify: a fold between the quadrature points is pulled back towards the stage's valid start", F,
+                   Simplex<2>, Simplex<3>) {
+  // A straight-sided degree-2 mesh (certified valid) in which the node of an
+  // interior edge slides towards one end, to 0.2 of the edge: the edge's
+  // tangent at that vertex, 4 x_mid - 3 x_v - x_w, turns back, so every
+  // element around the edge folds at the vertex, where no quadrature point is.
+  const auto start = box_mesh<F>(3, 2);
+  const auto ideal = make_ideal_mesh(start, IdealKind::straight_sided);
+  auto mesh = start;
+  int moved = -1;
+  for (int e = 0; e < mesh.num_elements() && moved < 0; ++e)
+    for (int j = 0; j < int(F::edges().size()) && moved < 0; ++j) {
+      const auto nodes = mesh.element(e);
+      const int v = nodes[F::edges()[j][0]], w = nodes[F::edges()[j][1]], mid = nodes[F::num_vertices + j];
+      if (mesh.node_class(v).kind != NodeKind::free || mesh.node_class(w).kind != NodeKind::free) continue;
+      mesh.node(mid) = mesh.node(v) + 0.2 * (mesh.node(w) - mesh.node(v));
+      moved = mid;
+    }
+  REQUIRE(moved >= 0);
+  REQUIRE(mesh_state(mesh, ideal).inverted == 0);  // valid at every quadrature point
+  REQUIRE(certify_mesh(mesh).invalid > 0);         // and folded between them
+
+  SolverOptions no_steps;  // the round's solve takes no step: only the pull-back can repair
+  no_steps.max_iterations = 0;
+  auto without = mesh;
+  const auto a = certify_and_repair<ShapeMeasure, DefaultExactness>(without, ideal, NewtonSolver{}, no_steps,
+                                                                     CertifyRepairOptions{}, 1, Regularization{});
+  CHECK_FALSE(a.certified());
+  const auto b = certify_and_repair<ShapeMeasure, DefaultExactness>(mesh, ideal, NewtonSolver{}, no_steps,
+                                                                     CertifyRepairOptions{}, 1, Regularization{},
+                                                                     ShapeMeasure{}, &start.nodes());
+  CHECK(b.certified());
+  CHECK(b.reason == RepairStop::certified);
+  CHECK(b.rounds >= 1);
+  CHECK(b.pull_backs >= 1);
+  CHECK(a.pull_backs == 0);
+  CHECK(certify_mesh(mesh).valid == mesh.num_elements());
+  // The moved node went back along its segment, part of the way; the other
+  // nodes of the patch were where the start has them and stay there.
+  const auto x0 = start.node(moved), x = mesh.node(moved), folded = without.node(moved);
+  const double t = (x - x0).dot(folded - x0) / (folded - x0).squaredNorm();
+  CHECK((x - x0 - t * (folded - x0)).norm() <= 1e-12);
+  CHECK(t > 0.0);
+  CHECK(t < 1.0);
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    if (i != moved) CHECK(mesh.node(i) == start.node(i));
 }

@@ -25,8 +25,32 @@
 ///   2. A local problem. Free: the free nodes of the failing elements and of
 ///      the elements sharing a node with them (a corner fold is often fixed by
 ///      an edge node of the neighbour). Problem: every element that has a free
-///      node, everything else held. Solved by the normal stage's solver.
-///   3. Acceptance. The round's elements are certified again. A round that
+///      node, everything else held.
+///   3. A valid start for it, when one is known (`valid_start`: the normal
+///      stage's starting configuration, e.g. a straight-sided mesh, in which
+///      the failing elements certify valid; counted in pull_backs): the patch
+///      then reaches pull_back_rings rings out, and its free nodes are pulled
+///      back towards their positions there, the failing elements' all the
+///      way and the others by less the farther out they are (w = 1 - ring /
+///      (rings + 1)), so that no element mixes the start with the stage's
+///      result: x(t) = x + (1 - t) w (x_start - x), t = 1/2, 1/4, ..., 2^-12,
+///      0, to the first t at which every element of the problem is certified
+///      valid. The
+///      round then starts with no element invalid anywhere, so no element is
+///      regularized and the barrier guards every point, sentinels included:
+///      the solve improves the patch without folding it at those points
+///      again; should it fold them elsewhere, between its points, the solve's
+///      result is pulled back in the same way towards the round's start, so
+///      a round that starts certified ends certified. Without it the failing
+///      elements start invalid at their
+///      sentinels and are regularized (delta > 0), and a regularized element
+///      is free to fold anywhere: with an ideal the mesh cannot attain (the
+///      equilateral tetrahedron of table 4.4 on a graded mesh) the regularized
+///      optimum can keep the fold (measured: table 4.4 at p = 2, 2 elements
+///      folded at a vertex stayed folded after 200 iterations and became
+///      invalid at their quadrature points too).
+///      Solved by the normal stage's solver.
+///   4. Acceptance. The round's elements are certified again. A round that
 ///      leaves more elements invalid at the quadrature points, or more
 ///      elements uncertified, than before it is undone, and the stage stops.
 ///
@@ -96,6 +120,7 @@ inline std::string_view to_string(RepairStop s) {
 struct CertifyRepairOptions {
   CertifyOptions certify;        ///< subdivision depth, tolerance, threads
   int max_rounds = 4;            ///< repair rounds at most (0: certify only)
+  int pull_back_rings = 3;       ///< node-neighbour rings around the failing elements that a pull-back moves
   double sentinel_weight = 0.1;  ///< a sentinel point's weight / the rule's mean weight
 };
 
@@ -105,6 +130,7 @@ struct CertificationOutcome {
   int valid = 0, invalid = 0, undecided = 0;                          ///< final certificate
   double min_scaled_jacobian = std::numeric_limits<double>::infinity();  ///< final certified lower bound
   int rounds = 0;             ///< repair rounds kept or undone
+  int pull_backs = 0;         ///< rounds that started from a patch pulled back towards the valid start
   int sentinel_points = 0;    ///< sentinel points of the last round
   RepairStop reason = RepairStop::certified;
   /// The rounds left no fewer uncertified elements than they started with,
@@ -140,6 +166,23 @@ Tabulation<Family> sentinel_tabulation(int p, const QuadratureRule<Family::dim>&
 }
 
 namespace detail {
+
+/// Whether every element of the patch (node coordinates X, connectivity C)
+/// is certified valid.
+template <ElementFamily Family, NodeSet Nodes, class Coordinates, class Connectivity>
+bool patch_certified(int p, const Coordinates& X, const Connectivity& C, const CertifyOptions& o, int threads) {
+  const detail::SerialEigenScope serial;
+  const auto& jb = jacobian_bernstein<Family, Nodes>(p);
+  const int m = int(C.cols());
+  std::vector<char> valid(m);
+  HOM_PARALLEL_FOR_DYNAMIC(detail::useful_threads(detail::resolve_threads(threads), m, 4))
+  for (int b = 0; b < m; ++b) {
+    Eigen::Matrix<double, Family::dim, Eigen::Dynamic> x(Family::dim, C.rows());
+    for (Eigen::Index i = 0; i < C.rows(); ++i) x.col(i) = X.col(C(i, b));
+    valid[b] = certify_element<Family>(jb, x, o).status == Certificate::certified_valid;
+  }
+  return std::all_of(valid.begin(), valid.end(), [](char v) { return v != 0; });
+}
 
 struct CertifyCounts {
   int valid = 0, invalid = 0, undecided = 0;
@@ -180,11 +223,14 @@ CertificationOutcome certification_outcome(const std::vector<ElementCertificate<
 
 /// Certifies every element of `mesh` and repairs the uncertified ones as the
 /// file comment describes, moving free nodes of `mesh` in place. `solver`,
-/// `so`, `threads`, `regularization` and `measure` are the normal stage's.
+/// `so`, `threads`, `regularization` and `measure` are the normal stage's;
+/// `valid_start`, when given, the node coordinates the normal stage started
+/// from (step 3 of the file comment; used where its elements certify valid).
 template <class Measure, QuadraturePolicy Q, class Solver, ElementFamily Family, NodeSet Nodes>
 CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, const IdealMesh<Family>& ideal,
                                         const Solver& solver, SolverOptions so, const CertifyRepairOptions& o, int threads,
-                                        const Regularization& regularization, const Measure& measure = {}) {
+                                        const Regularization& regularization, const Measure& measure = {},
+                                        const typename Mesh<Family, Nodes, Family::dim>::Coordinates* valid_start = nullptr) {
   using Point = typename Family::Point;
   using Problem = OptimizationProblem<Family, Measure>;
   const auto start = std::chrono::steady_clock::now();
@@ -279,18 +325,41 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
       break;
     }
 
-    // The round's patch: free nodes of the failing elements and their node
-    // neighbours; the elements of those nodes.
+    // The round's patch: free nodes of the failing elements and of the
+    // elements within `rings` node-neighbour rings of them (one ring, or
+    // pull_back_rings for a pull-back); the elements of those nodes.
     if (offsets.empty()) build_node_elements();
-    std::vector<char> ring(ne, 0), free_node(nn, 0), in_problem(ne, 0);
-    for (int e : failing)
-      for (int i = 0; i < npe; ++i)
-        for (int k = offsets[conn(i, e)]; k < offsets[conn(i, e) + 1]; ++k) ring[node_elements[k]] = 1;
+    // A pull-back needs the failing elements valid at the start.
+    bool pull_back = valid_start != nullptr;
+    if (pull_back) {
+      typename Problem::Connectivity Cf(npe, Eigen::Index(failing.size()));
+      for (std::size_t b = 0; b < failing.size(); ++b)
+        for (int i = 0; i < npe; ++i) Cf(i, Eigen::Index(b)) = conn(i, failing[b]);
+      pull_back = detail::patch_certified<Family, Nodes>(p, *valid_start, Cf, o.certify, threads);
+    }
+    const int rings = pull_back ? std::max(1, o.pull_back_rings) : 1;
+    std::vector<int> level(ne, -1);  // element rings away from the failing elements
+    std::vector<int> frontier = failing;
+    for (int e : failing) level[e] = 0;
+    for (int r = 1; r <= rings; ++r) {
+      std::vector<int> next;
+      for (int e : frontier)
+        for (int i = 0; i < npe; ++i)
+          for (int k = offsets[conn(i, e)]; k < offsets[conn(i, e) + 1]; ++k)
+            if (level[node_elements[k]] < 0) {
+              level[node_elements[k]] = r;
+              next.push_back(node_elements[k]);
+            }
+      frontier = std::move(next);
+    }
+    std::vector<char> free_node(nn, 0), in_problem(ne, 0);
+    std::vector<int> node_level(nn, rings + 1);
     int num_free = 0;
     for (int e = 0; e < ne; ++e)
-      if (ring[e])
+      if (level[e] >= 0)
         for (int i = 0; i < npe; ++i) {
           const int node = conn(i, e);
+          node_level[node] = std::min(node_level[node], level[e]);
           if (mesh_free[node] && !free_node[node]) {
             free_node[node] = 1;
             ++num_free;
@@ -320,6 +389,34 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
     typename Problem::Connectivity C(npe, Eigen::Index(elements.size()));
     for (std::size_t b = 0; b < elements.size(); ++b)
       for (int i = 0; i < npe; ++i) C(i, Eigen::Index(b)) = local[conn(i, elements[b])];
+    // Step 3: pull the patch back towards the stage's start until it certifies valid.
+    const auto certified_along = [&](const typename Problem::Coordinates& from, const typename Problem::Coordinates& to,
+                                     double first) -> std::optional<typename Problem::Coordinates> {
+      for (double t = first;; t = t > 1.0 / 4096 ? 0.5 * t : 0.0) {
+        typename Problem::Coordinates Y = from + t * (to - from);  // held nodes: from = to
+        if (detail::patch_certified<Family, Nodes>(p, Y, C, o.certify, threads)) return Y;
+        if (t == 0.0) return std::nullopt;
+      }
+    };
+    typename Problem::Coordinates start_of_round = X;
+    bool certified_start = false;
+    if (pull_back) {
+      // The pulled-back patch: each free node a fraction 1 - level / (rings +
+      // 1) of the way to its start, all the way at the failing elements and
+      // fading out towards the held nodes, so that no element mixes nodes at
+      // the start with nodes where the stage left them.
+      typename Problem::Coordinates S = X;
+      for (std::size_t k = 0; k < nodes.size(); ++k)
+        if (free[k]) {
+          const double w = 1.0 - double(node_level[nodes[k]]) / double(rings + 1);
+          S.col(Eigen::Index(k)) += w * (valid_start->col(nodes[k]) - X.col(Eigen::Index(k)));
+        }
+      if (auto Y = certified_along(S, X, 0.5)) {
+        start_of_round = std::move(*Y);
+        certified_start = true;
+        ++out.pull_backs;
+      }  // else the start is not valid here either: the round starts from X
+    }
 
     const Tabulation<Family> tab = sentinel_tabulation<Family, Nodes>(p, base_rule, sentinels, weight);
     std::vector<IdealAtPoints<Family::dim>> ideals, base_ideals;
@@ -327,11 +424,14 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
       ideals.push_back(ideal_at_points<Family>(tab, ideal.vertices(e)));
       base_ideals.push_back(ideal_at_points<Family>(base_tab, ideal.vertices(e)));
     }
-    Problem problem(tab, X, C, free, std::move(ideals), measure);
+    Problem problem(tab, start_of_round, C, free, std::move(ideals), measure);
     problem.set_threads(threads);
     problem.set_regularization(regularization);
     const Problem at_quadrature(base_tab, X, C, free, std::move(base_ideals), measure);  // validity as the normal stage sees it
     out.repairs.push_back(solver.solve(problem, so));
+    // From a certified start the round keeps the patch certified: the solve's
+    // step is shortened (towards the start of the round) until it is.
+    if (certified_start) problem.coordinates() = *certified_along(start_of_round, problem.coordinates(), 1.0);
     ++out.rounds;
     solved_with = sentinels.size();
     out.sentinel_points = int(sentinels.size());

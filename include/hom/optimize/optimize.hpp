@@ -162,11 +162,15 @@ OptimizeResult optimize_with(Mesh<Family, Nodes, SpaceDim>& mesh, const IdealMes
   auto problem = make_problem<Measure, Q>(mesh, ideal, measure);
   problem.set_threads(options.threads);
   problem.set_regularization(options.regularization());
+  // The stage's start: where it is certified valid, the repair pulls folded patches back towards it.
+  std::optional<typename Mesh<Family, Nodes, SpaceDim>::Coordinates> stage_start;
+  if (options.certify) stage_start = mesh.nodes();
   out.result = solver.solve(problem, so);
   mesh.nodes() = problem.coordinates();
   if (options.certify) {
     out.certification = certify_and_repair<Measure, Q>(mesh, ideal, solver, so, options.certify_repair_options(),
-                                                       options.threads, options.regularization(), measure);
+                                                       options.threads, options.regularization(), measure,
+                                                       &*stage_start);
     if (out.certification->rounds > 0) {  // the repair moved nodes: report the final mesh's state
       problem.coordinates() = mesh.nodes();
       const MeshState state = problem.status(problem.coordinates());
