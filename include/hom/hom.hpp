@@ -38,5 +38,28 @@
 #include "hom/mesh/sub_mesh.hpp"
 #include "hom/mesh/topology.hpp"
 
-// Optimization (chapter 4, appendices B-C).
+// Geometry of boundary entities (analytic curves and surfaces, the thesis's parameterizations).
+#include "hom/geometry/circle.hpp"
+#include "hom/geometry/curve_boundary.hpp"
+#include "hom/geometry/cylinder.hpp"
+#include "hom/geometry/geometry_model.hpp"
+#include "hom/geometry/hyperbolic_paraboloid.hpp"
+#include "hom/geometry/line.hpp"
+#include "hom/geometry/plane.hpp"
+#include "hom/geometry/sphere.hpp"
+#include "hom/geometry/thesis_parameterizations.hpp"
+#include "hom/geometry/torus.hpp"
+// Certified validity (Bernstein bounds of det D phi).
+#include "hom/quality/certify.hpp"
+// Optimization (chapter 4, appendices B-C; boundary layers, section 6.3.3).
+#include "hom/optimize/boundary_layer_pipeline.hpp"
+#include "hom/optimize/certified.hpp"
+#include "hom/optimize/continuation.hpp"
 #include "hom/optimize/element_objective.hpp"
+#include "hom/optimize/linear_formulation.hpp"
+#include "hom/optimize/optimize.hpp"
+// Meshes on parameterized surfaces (chapter 5).
+#include "hom/surface/optimize_boundary_face.hpp"
+#include "hom/surface/optimize_surface.hpp"
+#include "hom/surface/surface_continuation.hpp"
+#include "hom/surface/surface_mesh_quality.hpp"

@@ -317,9 +317,13 @@ inline void record_optimization(BoundaryLayerStage& s, const OptimizeResult& r) 
 }
 
 /// BoundaryLayerPipelineOptions::optimize_side_faces: returns the surface
-/// optimizer's iterations over all faces.
-inline int optimize_side_faces(Mesh<Simplex<3>>& mesh, const std::vector<int>& walls, const GeometryModel<3>& geometry,
-                               const BoundaryLayerPipelineOptions& options) {
+/// optimizer's iterations over all faces. (A template, although only Dim = 3
+/// is used, so that the surface optimizer is instantiated where the pipeline
+/// is, not in every file that includes this header.)
+template <int Dim>
+int optimize_side_faces(Mesh<Simplex<Dim>>& mesh, const std::vector<int>& walls, const GeometryModel<Dim>& geometry,
+                        const BoundaryLayerPipelineOptions& options) {
+  static_assert(Dim == 3, "hom::detail::optimize_side_faces: the faces of a tetrahedral mesh");
   if (!options.optimize_side_faces) return 0;
   std::vector<int> faces;
   for (const auto& f : mesh.boundary_facets())
