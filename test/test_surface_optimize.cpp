@@ -87,6 +87,16 @@ void perturb(UVs& U, const std::vector<bool>& free, double amplitude, unsigned s
     if (free[i]) U.col(i) += Eigen::Vector2d(d(rng), d(rng));
 }
 
+/// box_mesh on [0, 2]^2 with its free nodes moved by uniform noise of size amplitude.
+template <class F, class N>
+Mesh<F, N> perturbed_box(int cells, int p, double amplitude, unsigned seed) {
+  auto mesh = box_mesh<F, N>(cells, p, 0.0, 2.0);
+  UVs U = mesh.nodes();
+  perturb(U, free_node_mask(mesh), amplitude, seed);
+  mesh.nodes() = U;
+  return mesh;
+}
+
 /// Central-difference gradient and Hessian checks of a surface problem at its
 /// current coordinates, for the current deltas.
 template <class P>
@@ -207,11 +217,9 @@ TEST_CASE_TEMPLATE("plane z = 0 with the identity parameterization: exactly the 
   const Plane plane(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX());
   for (int p = 1; p <= 3; ++p) {
     CAPTURE(p);
-    auto mesh = box_mesh<F, N>(3, p, 0.0, 2.0);
+    const auto mesh = perturbed_box<F, N>(3, p, 0.25 / p, 3 + p);
     const auto free = free_node_mask(mesh);
-    UVs U = mesh.nodes();
-    perturb(U, free, 0.25 / p, 3 + p);
-    mesh.nodes() = U;
+    const UVs U = mesh.nodes();
     const IdealMesh<F> ideal = IdealMesh<F>::regular(mesh.num_elements());
     auto planar = make_problem(mesh, ideal);
     std::vector<SurfaceIdealVertices<F>> ideals(mesh.num_elements(), embed_ideal<F>(regular_ideal_vertices<F>()));
@@ -445,11 +453,10 @@ TEST_CASE_TEMPLATE("p-continuation on a surface: the linear sub-problem on z = 0
   const Plane plane(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX());
   for (int p = 2; p <= 4; ++p) {
     CAPTURE(p);
-    auto mesh = box_mesh<F, N>(2, p, 0.0, 2.0);
+    // Up to 0.9 of the node spacing: some sub-elements tangle.
+    const auto mesh = perturbed_box<F, N>(2, p, 0.9 / p, 11 + p);
     const auto free = free_node_mask(mesh);
-    UVs U = mesh.nodes();
-    perturb(U, free, 0.9 / p, 11 + p);  // up to 0.9 of the node spacing: some sub-elements tangle
-    mesh.nodes() = U;
+    const UVs U = mesh.nodes();
     const IdealMesh<F> ideal = IdealMesh<F>::regular(mesh.num_elements());
     auto planar = make_linear_sub_problem(mesh, ideal);
     const std::vector<SurfaceIdealVertices<F>> ideals(mesh.num_elements(), embed_ideal<F>(regular_ideal_vertices<F>()));
