@@ -72,10 +72,6 @@
 
 #include <boost/program_options.hpp>
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
-
 #include "harness.hpp"
 #include "plot_script.hpp"
 #include "ring_mesh.hpp"
@@ -109,16 +105,7 @@ constexpr double outer_radius = 2.0;
 // ---------------------------------------------------------------------------
 // The thesis's numbers.
 
-struct Row {
-  double min, max, mean, std_dev;
-  int inverted;
-};
-
-Json row_json(const Row& r) {
-  Json j = Json::object();
-  j.set("min_q", r.min).set("max_q", r.max).set("mean_q", r.mean).set("std_q", r.std_dev).set("inverted", r.inverted);
-  return j;
-}
+using Row = hom::bench::ThesisRow;
 
 /// Table D.1 (24 triangles); the initial row is given for p = 3 only.
 struct ThesisRing {
@@ -133,11 +120,7 @@ const ThesisRing thesis_d1[] = {
     {5, 330, std::nullopt, {0.95, 0.97, 0.96, 0.01, 0}},
     {10, 1260, std::nullopt, {0.95, 0.97, 0.96, 0.01, 0}},
 };
-const ThesisRing* thesis_ring(int p) {
-  for (const auto& t : thesis_d1)
-    if (t.p == p) return &t;
-  return nullptr;
-}
+const ThesisRing* thesis_ring(int p) { return hom::bench::thesis_entry(thesis_d1, p); }
 
 /// Appendix C, figure C.2 (degree-4 ring).
 constexpr int thesis_c_degree = 4;
@@ -160,11 +143,7 @@ const ThesisQuad thesis_d3[] = {
     {3, 534, 5210, {0.00, 1.00, 0.92, 0.12, 3}, {0.67, 1.00, 0.94, 0.05, 0}},
     {4, 200, 3614, {0.00, 0.99, 0.78, 0.22, 8}, {0.62, 0.99, 0.83, 0.09, 0}},
 };
-const ThesisQuad* thesis_quad(int p) {
-  for (const auto& t : thesis_d3)
-    if (t.p == p) return &t;
-  return nullptr;
-}
+const ThesisQuad* thesis_quad(int p) { return hom::bench::thesis_entry(thesis_d3, p); }
 
 /// Claim checked at the end: the smoothed triangle rings' minimum quality
 /// (thesis 0.94-0.95; hom's mesh is a reconstruction, so a margin).
@@ -663,12 +642,7 @@ int main(int argc, char** argv) {
     std::cerr << "bench_ring: " << e.what() << "\n";
     return 2;
   }
-#if defined(_OPENMP)
-  if (o.threads > 0) omp_set_num_threads(o.threads);
-  const int threads = omp_get_max_threads();
-#else
-  const int threads = 1;
-#endif
+  const int threads = hom::bench::set_threads(o.threads);
 
   try {
     fs::create_directories(o.out);
@@ -820,8 +794,8 @@ int main(int argc, char** argv) {
                                 k == 0 ? "initial" : "optimized", "shape", k == 2 ? "equilateral" : "straight-sided"};
           Json c = hom::io::quality_case(h, s, sj);
           Json thesis;
-          if (t && k == 0 && t->initial) thesis = row_json(*t->initial);
-          if (t && k == 1) thesis = row_json(t->smoothed);
+          if (t && k == 0 && t->initial) thesis = hom::bench::thesis_row_json(*t->initial);
+          if (t && k == 1) thesis = hom::bench::thesis_row_json(t->smoothed);
           if (std::holds_alternative<Json::Object>(thesis.value)) thesis.set("elements", 24).set("nodes", t->nodes);
           c.set("time_s", k == 0 ? 0.0 : r.time_s)
               .set("iterations", k == 0 ? 0 : r.iterations)
@@ -904,7 +878,7 @@ int main(int argc, char** argv) {
           hom::io::CaseHeader h{"ring_quadrilaterals", "quadrilateral", r.p, r.elements, r.nodes,
                                 k == 0 ? "initial" : "optimized", "shape", "straight-sided"};
           Json c = hom::io::quality_case(h, s, sj);
-          Json thesis = row_json(tr);
+          Json thesis = hom::bench::thesis_row_json(tr);
           thesis.set("elements", t->elements).set("nodes", t->nodes).set("geometry", "brake component (table D.3)");
           c.set("time_s", k ? r.time_s : 0.0)
               .set("iterations", k ? r.iterations : 0)

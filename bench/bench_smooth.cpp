@@ -129,10 +129,6 @@
 
 #include <boost/program_options.hpp>
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
-
 #include "cube_with_cavity.hpp"
 #include "harness.hpp"
 #include "hom/geometry/curve_boundary.hpp"
@@ -165,10 +161,7 @@ constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 // ---------------------------------------------------------------------------
 // The thesis's numbers.
 
-struct Row {
-  double min, max, mean, std_dev;
-  int inverted;
-};
+using Row = hom::bench::ThesisRow;
 
 /// Table 4.2 (1441 elements, 32382 nodes).
 constexpr Row thesis_42_initial{0.00, 1.00, 0.83, 0.28, 134};
@@ -183,18 +176,6 @@ constexpr Row thesis_45_equilateral{0.002, 0.948, 0.339, 0.212, 0};
 constexpr Row thesis_45_straight{0.990, 1.000, 0.990, 0.001, 0};
 constexpr double thesis_max_rv_equilateral = 2.013, thesis_max_rv_straight = 2e-3;
 constexpr int thesis_mu_one_equilateral = 0, thesis_mu_one_straight = 7387;
-
-/// A thesis row as JSON: quality rows with the report's keys (min_q, ...),
-/// scaled-Jacobian rows with plain ones (min, max, mean, std).
-Json row_json(const Row& r, bool quality = true) {
-  Json j = Json::object();
-  j.set(quality ? "min_q" : "min", r.min)
-      .set(quality ? "max_q" : "max", r.max)
-      .set(quality ? "mean_q" : "mean", r.mean)
-      .set(quality ? "std_q" : "std", r.std_dev)
-      .set("inverted", r.inverted);
-  return j;
-}
 
 // ---------------------------------------------------------------------------
 // Options and results.
@@ -669,9 +650,9 @@ void write_outputs(const Options& o, const std::vector<Stage>& stages, const std
           .set("certify_rounds", s.certification->rounds);
     Json t = Json();
     if (s.thesis) {
-      t = row_json(*s.thesis);
+      t = hom::bench::thesis_row_json(*s.thesis);
       t.set("elements", s.table == "4.2" ? 1441 : 7394).set("nodes", s.table == "4.2" ? 32382 : 79429);
-      if (s.thesis_scaled_jacobian) t.set("scaled_jacobian", row_json(*s.thesis_scaled_jacobian, false));
+      if (s.thesis_scaled_jacobian) t.set("scaled_jacobian", hom::bench::thesis_row_json(*s.thesis_scaled_jacobian, false));
       if (std::isfinite(s.thesis_max_rv)) t.set("max_relative_volume_error", s.thesis_max_rv);
       if (s.thesis_mu_one >= 0) t.set("mu_one", s.thesis_mu_one);
     }
@@ -773,12 +754,7 @@ int main(int argc, char** argv) {
     std::cerr << "bench_smooth: " << e.what() << "\n";
     return 2;
   }
-#if defined(_OPENMP)
-  if (o.threads > 0) omp_set_num_threads(o.threads);
-  const int threads = omp_get_max_threads();
-#else
-  const int threads = 1;
-#endif
+  const int threads = hom::bench::set_threads(o.threads);
 
   try {
     fs::create_directories(o.out);

@@ -64,10 +64,6 @@
 
 #include <boost/program_options.hpp>
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
-
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
 #include "hom/measure/shape_measure.hpp"
@@ -89,10 +85,7 @@ namespace {
 // ---------------------------------------------------------------------------
 // The thesis's numbers.
 
-struct Row {
-  double min, max, mean, std_dev;
-  int inverted;
-};
+using Row = hom::bench::ThesisRow;
 
 struct ThesisSphere {
   int p;
@@ -111,11 +104,7 @@ constexpr ThesisSphere thesis_sphere[] = {
 };
 constexpr int thesis_sphere_elements = 160;
 
-const ThesisSphere* thesis_sphere_case(int p) {
-  for (const auto& c : thesis_sphere)
-    if (c.p == p) return &c;
-  return nullptr;
-}
+const ThesisSphere* thesis_sphere_case(int p) { return hom::bench::thesis_entry(thesis_sphere, p); }
 
 // Table D.4 (degree 4, 68 hexahedra; the thesis gives no node count).
 constexpr int thesis_hex_p = 4;
@@ -126,14 +115,8 @@ constexpr Row thesis_hex_smoothed{0.96, 1.00, 0.99, 0.005, 0};
 constexpr double thesis_hex_min_quality = 0.96;
 
 Json row_json(const Row& r, int elements, std::optional<int> nodes) {
-  Json j = Json::object();
-  j.set("elements", elements)
-      .set("nodes", nodes ? Json(*nodes) : Json())
-      .set("min_q", r.min)
-      .set("max_q", r.max)
-      .set("mean_q", r.mean)
-      .set("std_q", r.std_dev)
-      .set("inverted", r.inverted);
+  Json j = hom::bench::thesis_row_json(r);
+  j.set("elements", elements).set("nodes", nodes ? Json(*nodes) : Json());
   return j;
 }
 
@@ -591,12 +574,7 @@ int main(int argc, char** argv) {
     std::cerr << "bench_sphere: " << e.what() << "\n";
     return 2;
   }
-#if defined(_OPENMP)
-  if (o.threads > 0) omp_set_num_threads(o.threads);
-  const int threads = omp_get_max_threads();
-#else
-  const int threads = 1;
-#endif
+  const int threads = hom::bench::set_threads(o.threads);
 
   try {
     fs::create_directories(o.out);

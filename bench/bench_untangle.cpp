@@ -54,10 +54,6 @@
 
 #include <boost/program_options.hpp>
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
-
 #include "cube_with_cavity.hpp"
 #include "gmsh_peer.hpp"
 #include "harness.hpp"
@@ -90,10 +86,7 @@ namespace {
 // ---------------------------------------------------------------------------
 // The thesis's numbers (table 4.1 and its caption).
 
-struct Row {
-  double min, max, mean, std_dev;
-  int inverted;
-};
+using Row = hom::bench::ThesisRow;
 
 struct ThesisCase {
   int p;
@@ -109,21 +102,11 @@ constexpr ThesisCase thesis_cases[] = {
     {10, 1441, 249387, {0.00, 0.21, 0.00, 0.01, 1439}, {0.96, 1.00, 1.00, 0.01, 0}},
 };
 
-const ThesisCase* thesis_case(int p) {
-  for (const auto& c : thesis_cases)
-    if (c.p == p) return &c;
-  return nullptr;
-}
+const ThesisCase* thesis_case(int p) { return hom::bench::thesis_entry(thesis_cases, p); }
 
 Json row_json(const Row& r, int elements, int nodes) {
-  Json j = Json::object();
-  j.set("elements", elements)
-      .set("nodes", nodes)
-      .set("min_q", r.min)
-      .set("max_q", r.max)
-      .set("mean_q", r.mean)
-      .set("std_q", r.std_dev)
-      .set("inverted", r.inverted);
+  Json j = hom::bench::thesis_row_json(r);
+  j.set("elements", elements).set("nodes", nodes);
   return j;
 }
 
@@ -534,12 +517,7 @@ int main(int argc, char** argv) {
     std::cerr << "bench_untangle: " << e.what() << "\n";
     return 2;
   }
-#if defined(_OPENMP)
-  if (o.threads > 0) omp_set_num_threads(o.threads);
-  const int threads = omp_get_max_threads();
-#else
-  const int threads = 1;
-#endif
+  const int threads = hom::bench::set_threads(o.threads);
 
   try {
     fs::create_directories(o.out);

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <iostream>
@@ -20,6 +21,10 @@
 #include <vector>
 
 #include <Eigen/Dense>
+
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
 
 #include "hom/io/report.hpp"
 #include "hom/mesh/mesh.hpp"
@@ -35,6 +40,18 @@ inline double peak_rss_mb() {
 
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Applies a harness's --threads (0 keeps OpenMP's default) and returns the
+/// number of threads the run will use.
+inline int set_threads(int requested) {
+#if defined(_OPENMP)
+  if (requested > 0) omp_set_num_threads(requested);
+  return omp_get_max_threads();
+#else
+  (void)requested;
+  return 1;
+#endif
 }
 
 /// A table cell: fixed precision, "-" for a missing (non-finite) value.
@@ -55,6 +72,33 @@ inline double interpolate_geometric(const std::map<int, double>& table, int p) {
   auto lo = std::prev(hi);
   const double t = double(p - lo->first) / double(hi->first - lo->first);
   return std::exp((1 - t) * std::log(lo->second) + t * std::log(hi->second));
+}
+
+/// One row of a thesis statistics table (Min, Max, Mean, Std, #inverted).
+struct ThesisRow {
+  double min, max, mean, std_dev;
+  int inverted;
+};
+
+/// A thesis row as JSON: quality rows with the report's keys (min_q, ...),
+/// scaled-Jacobian rows with plain ones (min, max, mean, std).
+inline io::Json thesis_row_json(const ThesisRow& r, bool quality = true) {
+  io::Json j = io::Json::object();
+  j.set(quality ? "min_q" : "min", r.min)
+      .set(quality ? "max_q" : "max", r.max)
+      .set(quality ? "mean_q" : "mean", r.mean)
+      .set(quality ? "std_q" : "std", r.std_dev)
+      .set("inverted", r.inverted);
+  return j;
+}
+
+/// The entry of a per-degree thesis table (an array of structs with a
+/// member p) for degree p, or nullptr when the thesis has none.
+template <class Entry, std::size_t N>
+const Entry* thesis_entry(const Entry (&table)[N], int p) {
+  for (const Entry& e : table)
+    if (e.p == p) return &e;
+  return nullptr;
 }
 
 /// Deterministic across platforms: mt19937_64 is fully specified and the
