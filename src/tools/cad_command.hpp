@@ -55,6 +55,37 @@ inline double peak_rss_mb() {
   return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
 }
 
+/// Names the failing elements of an invalid result so that a user can find
+/// them: up to `limit` of the elements `failing(e)` picks, each with its index
+/// in the mesh (the linear mesh's element order), centroid, quality, scaled
+/// Jacobian and where its nodes are: interior nodes move freely, nodes on a
+/// CAD face slide on it, nodes on CAD edges and vertices stay (a fold that
+/// only held nodes determine cannot be undone).
+template <class MeshT, class Pred>
+void print_failing_elements(const cad::CurveResult<MeshT>& r, Pred failing, int limit = 5) {
+  int listed = 0, total = 0;
+  for (int e = 0; e < r.mesh.num_elements(); ++e) {
+    if (!failing(e)) continue;
+    if (++total > limit) continue;
+    ++listed;
+    const auto x = r.mesh.element_coordinates(e);
+    const Eigen::VectorXd c = x.rowwise().mean();
+    int interior = 0, on_faces = 0;
+    const auto nodes = r.mesh.element(e);
+    for (int k = 0; k < int(nodes.size()); ++k) {
+      const NodeClass& nc = r.mesh.node_class(nodes[k]);
+      interior += nc.kind == NodeKind::free;
+      on_faces += nc.kind == NodeKind::on_entity && nc.entity && nc.entity->dim == 2;
+    }
+    std::fprintf(stderr, "  element %d: centroid (", e);
+    for (int a = 0; a < int(c.size()); ++a) std::fprintf(stderr, a ? ", %.6g" : "%.6g", c[a]);
+    std::fprintf(stderr, "), q %.3g, scaled Jacobian %.3g; of its %d nodes %d interior, %d on CAD faces, %d held\n",
+                 r.element_quality[e], r.element_scaled_jacobian[e], int(nodes.size()), interior, on_faces,
+                 int(nodes.size()) - interior - on_faces);
+  }
+  if (total > listed) std::fprintf(stderr, "  ... and %d more\n", total - listed);
+}
+
 inline void print_stage_table(const std::vector<cad::StageReport>& stages) {
   std::printf("\n  %-8s %-10s %8s %8s %7s %7s %7s %8s %5s %8s %8s\n", "part", "stage", "elements", "nodes", "Min", "Max",
               "Mean", "Std.Dev.", "#inv", "min SJ", "time s");
@@ -126,8 +157,12 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   // value there is a fold that no quadrature point sees (typically an element
   // corner on a curved boundary opened beyond 180 degrees); a zero one a
   // corner of 180 degrees or, on a surface, a pole (allowed there).
+  auto folded_at_a_node = [&](int e) {
+    const double sj = r.element_scaled_jacobian[e];
+    return S == MeshT::dim ? !(sj > 0.0) : !(sj >= 0.0);
+  };
   int folded_at_nodes = 0;
-  for (double sj : r.element_scaled_jacobian) folded_at_nodes += S == MeshT::dim ? !(sj > 0.0) : !(sj >= 0.0);
+  for (int e = 0; e < int(r.element_scaled_jacobian.size()); ++e) folded_at_nodes += folded_at_a_node(e);
   print_stage_table(r.stages);
   const double rss = peak_rss_mb();
   std::printf("boundary on the CAD: %d nodes checked, largest distance %.3g\n", r.conformity.checked,
@@ -137,21 +172,27 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   const bool valid = r.valid && folded_at_nodes == 0;
   const char* cmd = o.command.c_str();
   if (!valid) {
-    if (r.inverted > 0)
+    if (r.inverted > 0) {
       std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; nothing written\n",
                    cmd, r.inverted, r.mesh.num_elements());
-    else if (!r.conformity.ok)
+      print_failing_elements(r, [&](int e) { return !r.element_valid[e]; });
+    } else if (!r.conformity.ok)
       std::fprintf(stderr, "hom: %s: INVALID result: %s; nothing written\n", cmd, r.conformity.problem.c_str());
-    else if (uncertified)
+    else if (uncertified) {
+      const auto& failing = r.certification->uncertified;  // ascending
       std::fprintf(stderr,
                    "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish between "
                    "quadrature points); nothing written\n",
-                   cmd, int(r.certification->uncertified.size()), r.mesh.num_elements());
-    else
+                   cmd, int(failing.size()), r.mesh.num_elements());
+      print_failing_elements(r, [&](int e) { return std::binary_search(failing.begin(), failing.end(), e); });
+    }
+    else {
       std::fprintf(stderr,
                    "hom: %s: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
                    "valid: a fold at an element corner); nothing written\n",
                    cmd, folded_at_nodes);
+      print_failing_elements(r, folded_at_a_node);
+    }
   } else {
     std::printf("valid: every element valid at every quadrature point and node%s, every boundary node on its CAD entity\n",
                 r.certification ? " and certified valid everywhere" : "");
