@@ -12,6 +12,7 @@
 
 #include "hom/mesh/coloring.hpp"
 #include "hom/mesh/elevate.hpp"
+#include "hom/mesh/flat_corners.hpp"
 #include "hom/mesh/mesh.hpp"
 #include "hom/mesh/structured.hpp"
 #include "hom/mesh/sub_mesh.hpp"
@@ -410,4 +411,174 @@ TEST_CASE("physical tags of an element's entity") {
     if (en.id == EntityId{2, 1}) en.physical_tags = {4, 9};
   CHECK(m.physical_tags(EntityId{2, m.element_entities()[0]}) == std::vector<int>{4, 9});
   CHECK(m.physical_tags(EntityId{3, 1}).empty());
+}
+
+namespace {
+
+// Boundary facets of a linear simplex mesh given by vertex sets and entity
+// tags: each facet is found among its element's local facets.
+template <int D>
+void add_boundary_facets(Mesh<Simplex<D>>& mesh, const std::vector<std::pair<std::vector<int>, int>>& tagged) {
+  for (const auto& [verts, tag] : tagged) {
+    const std::set<int> want(verts.begin(), verts.end());
+    bool found = false;
+    for (int e = 0; e < mesh.num_elements() && !found; ++e)
+      for (int f = 0; f < num_facets<Simplex<D>> && !found; ++f) {
+        const auto lv = facet_vertices<Simplex<D>>(f);
+        BoundaryFacet<Simplex<D>> bf;
+        std::set<int> have;
+        for (int k = 0; k < D; ++k) have.insert(bf.vertices[k] = mesh.vertex(e, lv[k]));
+        if (have != want) continue;
+        bf.element = e;
+        bf.local_facet = f;
+        bf.entity_tag = tag;
+        mesh.boundary_facets().push_back(bf);
+        found = true;
+      }
+    REQUIRE(found);
+  }
+}
+
+template <int D>
+double signed_volume(const Mesh<Simplex<D>>& mesh, int e) {
+  Eigen::Matrix<double, D, D> j;
+  for (int k = 0; k < D; ++k) j.col(k) = mesh.node(mesh.vertex(e, k + 1)) - mesh.node(mesh.vertex(e, 0));
+  return j.determinant();
+}
+
+// Every boundary facet's owner holds the facet's vertices at its local facet.
+template <int D>
+void check_facet_owners(const Mesh<Simplex<D>>& mesh) {
+  for (const auto& bf : mesh.boundary_facets()) {
+    const auto lv = facet_vertices<Simplex<D>>(bf.local_facet);
+    std::set<int> have, want(bf.vertices.begin(), bf.vertices.end());
+    for (int k = 0; k < D; ++k) have.insert(mesh.vertex(bf.element, lv[k]));
+    CHECK(have == want);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("split_flat_corners: a tetrahedron with two faces on one surface is split across its interior edge") {
+  // An octahedron cut into four tetrahedra around its axis a-b; the two
+  // faces (a, p0, p1) and (b, p0, p1) are on surface 1, each other face on
+  // a surface of its own, so
+  // the tetrahedron (a, b, p0, p1) has flat corners at p0 and p1: their
+  // three edges are all on surface 1.
+  Eigen::Matrix3Xd x(3, 6);
+  x << 0, 0, 1, 0, -1, 0,  //
+      0, 0, 0, 1, 0, -1,   //
+      1, -1, 0, 0, 0, 0;
+  Eigen::MatrixXi t(4, 4);
+  for (int i = 0; i < 4; ++i) t.col(i) << 1, 0, 2 + i, 2 + (i + 1) % 4;
+  Mesh<Simplex<3>> mesh(1, x, t);
+  for (int e = 0; e < 4; ++e) REQUIRE(signed_volume(mesh, e) > 0);
+  std::vector<std::pair<std::vector<int>, int>> facets;
+  for (int i = 0; i < 4; ++i)
+    for (int pole : {0, 1}) facets.push_back({{pole, 2 + i, 2 + (i + 1) % 4}, i == 0 ? 1 : 10 + 2 * i + pole});
+  add_boundary_facets(mesh, facets);
+  for (int i = 0; i < 6; ++i) mesh.node_class(i) = {NodeKind::on_entity, EntityId{2, 2}, 0, {}};
+
+  const auto corners = find_flat_corners(mesh);
+  REQUIRE(corners.size() == 2);
+  for (const auto& c : corners) {
+    CHECK(c.element == 0);
+    CHECK(c.entity == 1);
+    CHECK((mesh.vertex(0, c.vertex) == 2 || mesh.vertex(0, c.vertex) == 3));
+  }
+  const auto s = split_flat_corners(mesh);
+  CHECK(s.corners == 2);
+  CHECK(s.edges_split == 1);  // the axis a-b, shared by all four
+  CHECK(s.centroid_splits == 0);
+  REQUIRE(mesh.num_elements() == 8);
+  REQUIRE(mesh.num_nodes() == 7);
+  CHECK(mesh.node(6).norm() < 1e-15);  // the axis's midpoint
+  CHECK(mesh.node_class(6).kind == NodeKind::free);
+  CHECK(find_flat_corners(mesh).empty());
+  double volume = 0;
+  for (int e = 0; e < 8; ++e) {
+    CHECK(signed_volume(mesh, e) > 0);  // orientation kept
+    volume += signed_volume(mesh, e) / 6;
+  }
+  CHECK(volume == doctest::Approx(4.0 / 3.0));  // the octahedron's
+  CHECK(mesh.boundary_facets().size() == 8);
+  check_facet_owners(mesh);
+}
+
+TEST_CASE("split_flat_corners: triangles with two edges on one curve; a triangle with no interior edge") {
+  // a-b-c on curve 1 (b nearly on the chord a-c), c-d-a on curve 2: both
+  // triangles have a flat corner and share the interior edge a-c.
+  Eigen::Matrix2Xd x(2, 4);
+  x << 0, 1, 2, 1,  //
+      0, 0.1, 0, -1;
+  Eigen::MatrixXi t(3, 2);
+  t.col(0) << 0, 2, 1;
+  t.col(1) << 0, 3, 2;
+  Mesh<Simplex<2>> mesh(1, x, t);
+  for (int e = 0; e < 2; ++e) REQUIRE(signed_volume(mesh, e) > 0);
+  add_boundary_facets(mesh, {{{0, 1}, 1}, {{1, 2}, 1}, {{2, 3}, 2}, {{3, 0}, 2}});
+  CHECK(find_flat_corners(mesh).size() == 2);
+  const auto s = split_flat_corners(mesh);
+  CHECK(s.edges_split == 1);
+  REQUIRE(mesh.num_elements() == 4);
+  CHECK(find_flat_corners(mesh).empty());
+  double area = 0;
+  for (int e = 0; e < 4; ++e) {
+    CHECK(signed_volume(mesh, e) > 0);
+    area += signed_volume(mesh, e) / 2;
+  }
+  CHECK(area == doctest::Approx(0.1 + 1.0));
+  check_facet_owners(mesh);
+
+  // One triangle alone: every edge is a boundary edge, so the triangle is
+  // split at its centroid.
+  Mesh<Simplex<2>> lone(1, x.leftCols(3), t.leftCols(1));
+  add_boundary_facets(lone, {{{0, 1}, 1}, {{1, 2}, 1}, {{2, 0}, 2}});
+  const auto l = split_flat_corners(lone);
+  CHECK(l.edges_split == 0);
+  CHECK(l.centroid_splits == 1);
+  REQUIRE(lone.num_elements() == 3);
+  CHECK((lone.node(3) - Eigen::Vector2d(1, 0.1 / 3)).norm() < 1e-15);
+  CHECK(find_flat_corners(lone).empty());
+  area = 0;
+  for (int e = 0; e < 3; ++e) {
+    CHECK(signed_volume(lone, e) > 0);
+    area += signed_volume(lone, e) / 2;
+  }
+  CHECK(area == doctest::Approx(0.1));
+  check_facet_owners(lone);
+
+  // Only linear meshes.
+  auto quadratic = elevate(lone, 2);
+  CHECK_THROWS_AS(split_flat_corners(quadratic), std::invalid_argument);
+}
+
+TEST_CASE("split_flat_corners: a tetrahedron with every edge on the boundary is split at its centroid") {
+  // The unit tetrahedron alone, faces (0,1,2) and (0,1,3) on surface 1:
+  // flat corners at vertices 0 and 1, and no interior edge.
+  Eigen::Matrix3Xd x(3, 4);
+  x << 0, 1, 0, 0,  //
+      0, 0, 1, 0,   //
+      0, 0, 0, 1;
+  Eigen::MatrixXi t(4, 1);
+  t << 0, 1, 2, 3;
+  Mesh<Simplex<3>> mesh(1, x, t);
+  add_boundary_facets(mesh, {{{0, 1, 2}, 1}, {{0, 1, 3}, 1}, {{0, 2, 3}, 2}, {{1, 2, 3}, 3}});
+  CHECK(find_flat_corners(mesh).size() == 2);
+  const auto s = split_flat_corners(mesh);
+  CHECK(s.centroid_splits == 1);
+  CHECK(s.edges_split == 0);
+  REQUIRE(mesh.num_elements() == 4);
+  CHECK((mesh.node(4) - Eigen::Vector3d::Constant(0.25)).norm() < 1e-15);
+  CHECK(find_flat_corners(mesh).empty());
+  double volume = 0;
+  for (int e = 0; e < 4; ++e) {
+    CHECK(signed_volume(mesh, e) > 0);
+    volume += signed_volume(mesh, e) / 6;
+  }
+  CHECK(volume == doctest::Approx(1.0 / 6.0));
+  check_facet_owners(mesh);
+  std::set<int> owners;
+  for (const auto& bf : mesh.boundary_facets()) owners.insert(bf.element);
+  CHECK(owners.size() == 4);  // one facet per child
 }

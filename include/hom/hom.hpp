@@ -33,6 +33,7 @@
 #include "hom/mesh/boundary_layer.hpp"
 #include "hom/mesh/coloring.hpp"
 #include "hom/mesh/elevate.hpp"
+#include "hom/mesh/flat_corners.hpp"
 #include "hom/mesh/mesh.hpp"
 #include "hom/mesh/structured.hpp"
 #include "hom/mesh/sub_mesh.hpp"

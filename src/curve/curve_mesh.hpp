@@ -80,6 +80,9 @@ struct CurveOptions {
   /// (the face) has inverted elements.
   Continuation pcont = Continuation::automatic;
   bool optimize_surface = true;     ///< chapter 5 stage on the boundary faces
+  /// Split the linear simplices with a flat corner (every edge there on one
+  /// CAD face, or curve in 2D) before curving (mesh/flat_corners.hpp).
+  bool split_flat_corners = true;
   int surface_max_iterations = 50;  ///< per CAD face
   int max_iterations = 200;         ///< volume / planar stage, per continuation stage
   /// Volume / planar stage (and its p-continuation stage): stop once every

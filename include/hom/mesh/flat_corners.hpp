@@ -1,0 +1,219 @@
+#pragma once
+/// @file flat_corners.hpp
+/// Simplices of a linear mesh with a "flat corner", and their repair by
+/// edge splitting, before the mesh is curved (chapter 6's a posteriori
+/// approach).
+///
+/// At a vertex of a Lagrange simplex, D phi is spanned by the tangents of the
+/// element's edges there (each column of D phi at a vertex is the derivative
+/// along one of the d edges from it). If all d edges from vertex a lie on one
+/// smooth boundary entity (a curve in 2D, a surface in 3D: each edge is an
+/// edge of a boundary facet classified on that entity), then once they are
+/// curved onto it their tangents lie in its tangent line / plane at a, so
+/// det(D phi(a)) = 0, whatever the free nodes do: the optimizer (chapter 4)
+/// and any repair that moves interior nodes cannot make the element valid.
+/// A tetrahedron with two faces on the same surface (a linear mesher makes
+/// them at a reflex edge of the surface triangulation, and on thin parts) has
+/// two such corners; a triangle with two edges on one curve, one.
+///
+/// The repair is topological: an edge of the element's facet opposite the
+/// flat corner that is not a boundary edge (the longest such) is split at its
+/// midpoint, with every element around it (each into two, the halves keeping
+/// the orientation). Where every edge of the element is a boundary edge (a
+/// tetrahedron with three or four faces on the boundary, as at a thin
+/// trailing edge), the element alone is split at its centroid into d + 1.
+/// Afterwards every corner of the new elements has an edge to the new,
+/// interior node, so none is flat; the boundary facets keep their vertices
+/// (the split edge is on none; a centroid split keeps the facets). The
+/// quadrilateral analogue, for the 2D meshes from CAD, is
+/// src/cad/quad_ears.hpp.
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hom/element/simplex.hpp"
+#include "hom/mesh/facet.hpp"
+#include "hom/mesh/mesh.hpp"
+
+namespace hom {
+
+namespace detail {
+
+using MeshEdge = std::pair<int, int>;
+inline MeshEdge mesh_edge(int a, int b) { return a < b ? MeshEdge{a, b} : MeshEdge{b, a}; }
+
+/// Entity tags of the boundary facets each boundary edge belongs to.
+template <int D, NodeSet Nodes>
+std::map<MeshEdge, std::vector<int>> boundary_edge_entities(const Mesh<Simplex<D>, Nodes, D>& mesh) {
+  std::map<MeshEdge, std::vector<int>> out;
+  for (const auto& f : mesh.boundary_facets())
+    for (int i = 0; i < D; ++i)
+      for (int j = i + 1; j < D; ++j) {
+        auto& tags = out[mesh_edge(f.vertices[i], f.vertices[j])];
+        if (std::find(tags.begin(), tags.end(), f.entity_tag) == tags.end()) tags.push_back(f.entity_tag);
+      }
+  return out;
+}
+
+}  // namespace detail
+
+/// A flat corner of a simplex: local vertex `vertex` of element `element`,
+/// whose d edges all lie on boundary entity `entity` (see above).
+struct FlatCorner {
+  int element = 0;
+  int vertex = 0;
+  int entity = 0;
+};
+
+/// The flat corners of a linear simplex mesh (planar triangles or
+/// tetrahedra), from its boundary facets and their entity tags.
+template <int D, NodeSet Nodes>
+std::vector<FlatCorner> find_flat_corners(const Mesh<Simplex<D>, Nodes, D>& mesh) {
+  const auto on_boundary = detail::boundary_edge_entities(mesh);
+  std::vector<FlatCorner> out;
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    for (int a = 0; a <= D; ++a) {
+      // The entities shared by every edge from vertex a.
+      std::optional<std::vector<int>> common;
+      for (int b = 0; b <= D && (!common || !common->empty()); ++b) {
+        if (b == a) continue;
+        const auto it = on_boundary.find(detail::mesh_edge(mesh.vertex(e, a), mesh.vertex(e, b)));
+        if (it == on_boundary.end()) {
+          common = std::vector<int>{};
+          break;
+        }
+        if (!common) {
+          common = it->second;
+          continue;
+        }
+        std::erase_if(*common, [&](int t) { return std::find(it->second.begin(), it->second.end(), t) == it->second.end(); });
+      }
+      if (common && !common->empty()) out.push_back({e, a, common->front()});
+    }
+  return out;
+}
+
+/// What split_flat_corners did.
+struct FlatCornerSplit {
+  int corners = 0;      ///< flat corners found
+  int edges_split = 0;     ///< edges split (each adds one node)
+  int centroid_splits = 0; ///< elements split at their centroid (each adds one node)
+};
+
+/// Splits edges until no element has a flat corner (see above). The mesh
+/// must be linear; new nodes are free (interior), classified on the split
+/// elements' entity; the ideal becomes the new straight-sided mesh.
+template <int D, NodeSet Nodes>
+FlatCornerSplit split_flat_corners(Mesh<Simplex<D>, Nodes, D>& mesh) {
+  using Family = Simplex<D>;
+  using MeshT = Mesh<Family, Nodes, D>;
+  if (mesh.degree() != 1)
+    throw std::invalid_argument("hom::split_flat_corners: the mesh must be linear, it has degree " +
+                                std::to_string(mesh.degree()));
+  FlatCornerSplit out;
+  const auto corners = find_flat_corners(mesh);
+  out.corners = int(corners.size());
+  if (corners.empty()) return out;
+
+  const auto on_boundary = detail::boundary_edge_entities(mesh);
+  std::vector<std::array<int, D + 1>> elements(mesh.num_elements());
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    for (int k = 0; k <= D; ++k) elements[e][k] = mesh.vertex(e, k);
+  std::vector<Eigen::Matrix<double, D, 1>> x;
+  for (int i = 0; i < mesh.num_nodes(); ++i) x.push_back(mesh.node(i));
+  auto node_classes = mesh.node_classes();
+  auto entities = mesh.element_entities();
+  auto facets = mesh.boundary_facets();
+
+  auto has = [](const std::array<int, D + 1>& el, int v) { return std::find(el.begin(), el.end(), v) != el.end(); };
+  auto split = [&](int a, int b) {
+    const int m = int(x.size());
+    x.push_back(0.5 * (x[a] + x[b]));
+    const std::size_t before = elements.size();
+    for (std::size_t e = 0; e < before; ++e) {
+      if (!has(elements[e], a) || !has(elements[e], b)) continue;
+      // The half with b replaced by m stays at e; the other is appended.
+      auto other = elements[e];
+      std::replace(other.begin(), other.end(), a, m);
+      std::replace(elements[e].begin(), elements[e].end(), b, m);
+      elements.push_back(other);
+      entities.push_back(entities[e]);
+      // A facet owned by e contains a or b, not both (ab is on none).
+      for (auto& f : facets)
+        if (f.element == int(e) && std::find(f.vertices.begin(), f.vertices.end(), b) != f.vertices.end())
+          f.element = int(elements.size()) - 1;
+      if (node_classes.size() == std::size_t(m))
+        node_classes.push_back(NodeClass{NodeKind::free, EntityId{D, entities[e]}, 0, {}});
+    }
+    ++out.edges_split;
+  };
+  auto split_at_centroid = [&](int e) {
+    const int g = int(x.size());
+    x.push_back(Eigen::Matrix<double, D, 1>::Zero());
+    for (int v : elements[e]) x.back() += x[v] / double(D + 1);
+    node_classes.push_back(NodeClass{NodeKind::free, EntityId{D, entities[e]}, 0, {}});
+    // Child k has vertex k replaced by g; child 0 stays at e, and the facet
+    // at local facet f belongs to a child that keeps all its vertices.
+    const auto parent = elements[e];
+    for (int k = 1; k <= D; ++k) {
+      elements.push_back(parent);
+      elements.back()[k] = g;
+      entities.push_back(entities[e]);
+    }
+    elements[e][0] = g;
+    for (auto& f : facets) {
+      if (f.element != e) continue;
+      int missing = 0;  // the parent's vertex the facet lacks
+      while (std::find(f.vertices.begin(), f.vertices.end(), parent[missing]) != f.vertices.end()) ++missing;
+      if (missing != 0) f.element = int(elements.size()) - D + (missing - 1);
+    }
+    ++out.centroid_splits;
+  };
+  // Every corner that is still flat when its turn comes (a split around
+  // another corner may have removed it): the new elements have none.
+  for (const auto& c : corners) {
+    const auto el = elements[c.element];
+    bool untouched = true;
+    for (int k = 0; k <= D; ++k) untouched = untouched && el[k] == mesh.vertex(c.element, k);
+    if (!untouched) continue;
+    std::optional<detail::MeshEdge> longest;
+    double length = -1.0;
+    for (int i = 0; i <= D; ++i)
+      for (int j = i + 1; j <= D; ++j) {
+        if (i == c.vertex || j == c.vertex) continue;
+        const auto edge = detail::mesh_edge(el[i], el[j]);
+        if (on_boundary.count(edge)) continue;
+        const double l = (x[el[i]] - x[el[j]]).norm();
+        if (l > length) {
+          length = l;
+          longest = edge;
+        }
+      }
+    if (longest)
+      split(longest->first, longest->second);
+    else
+      split_at_centroid(c.element);
+  }
+
+  typename MeshT::Coordinates nodes(D, x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) nodes.col(i) = x[i];
+  typename MeshT::Connectivity connectivity(D + 1, elements.size());
+  for (std::size_t e = 0; e < elements.size(); ++e)
+    for (int k = 0; k <= D; ++k) connectivity(k, e) = elements[e][k];
+  MeshT split_mesh(1, std::move(nodes), std::move(connectivity));
+  split_mesh.node_classes() = std::move(node_classes);
+  split_mesh.element_entities() = std::move(entities);
+  split_mesh.entities() = mesh.entities();
+  split_mesh.physical_groups() = mesh.physical_groups();
+  split_mesh.boundary_facets() = std::move(facets);
+  mesh = std::move(split_mesh);
+  return out;
+}
+
+}  // namespace hom
