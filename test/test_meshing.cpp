@@ -14,8 +14,12 @@
 #include "cube_with_cavity.hpp"
 #include "gmsh_model.hpp"
 #include "hom/geometry/curve_boundary.hpp"
+#include "hom/measure/shape_measure.hpp"
 #include "hom/mesh/elevate.hpp"
+#include "hom/mesh/flat_corners.hpp"
 #include "hom/mesh/topology.hpp"
+#include "hom/optimize/optimize.hpp"
+#include "hom/quality/certify.hpp"
 
 using namespace hom;
 
@@ -103,6 +107,37 @@ TEST_CASE("cube with a spherical cavity: elevated and curved") {
     for (int i = 0; i < mesh.num_nodes(); ++i)
       if (mesh.node_class(i).kind == NodeKind::free) CHECK((mesh.node(i) - before.node(i)).norm() == 0.0);
   }
+}
+
+TEST_CASE("coarse cube with a cavity: certified valid at p = 2 once its flat corners are split") {
+  // Gmsh's coarse mesh has a tetrahedron with two faces on the sphere: at
+  // the two vertices of their common edge, all three edges lie on the
+  // sphere, so det D phi there is set by the curved boundary alone
+  // (mesh/flat_corners.hpp).
+  const auto c = meshing::cube_with_cavity({.cube_size = 2.0, .sphere_size = 0.3});
+  const auto corners = find_flat_corners(c.mesh);
+  REQUIRE(!corners.empty());
+  for (const auto& k : corners) CHECK(k.entity == c.sphere_tag);
+  auto certified_after_optimization = [&](const Mesh<Simplex<3>>& linear) {
+    auto mesh = elevate(linear, 2);
+    curve_boundary(mesh, c.geometry);
+    OptimizeOptions opt;
+    opt.p_continuation = true;
+    opt.threads = 1;
+    optimize<ShapeMeasure, DefaultExactness>(mesh, opt);
+    return certify_mesh(mesh);
+  };
+  CHECK(certified_after_optimization(c.mesh).invalid > 0);  // a flat corner's element
+
+  auto split = c.mesh;
+  const auto s = split_flat_corners(split);
+  CHECK(s.corners == int(corners.size()));
+  CHECK(s.edges_split > 0);
+  CHECK(find_flat_corners(split).empty());
+  const auto cert = certified_after_optimization(split);
+  CHECK(cert.invalid == 0);
+  CHECK(cert.undecided == 0);
+  CHECK(cert.valid == split.num_elements());
 }
 
 TEST_CASE("analytic geometry and mesh from a Gmsh model") {

@@ -22,7 +22,6 @@
 #include "hom/measure/oddy_measure.hpp"
 #include "hom/measure/shape_measure.hpp"
 #include "hom/mesh/elevate.hpp"
-#include "hom/mesh/flat_corners.hpp"
 #include "hom/optimize/optimize.hpp"
 #include "hom/quality/mesh_quality.hpp"
 #include "hom/surface/optimize_surface.hpp"
@@ -145,11 +144,11 @@ class Pipeline {
   /// would have det = 0 there once curved, which no optimization of the
   /// interior can mend. Surface meshes and quadrilaterals are left as they
   /// are (the latter's ears are split by the mesher, src/cad/quad_ears.hpp).
-  MeshT without_flat_corners(const MeshT& linear) {
+  MeshT without_flat_corners(const MeshT& linear, FlatCornerSplit& s) {
     MeshT out = linear;
     if constexpr (Family::is_simplex && !surface) {
       if (!o_.split_flat_corners) return out;
-      const auto s = split_flat_corners(out);
+      s = split_flat_corners(out);
       if (s.corners > 0)
         say("linear mesh: " + std::to_string(s.corners) + " flat corners (every edge there on one CAD " +
             (volume ? "face" : "curve") + "): " + std::to_string(s.edges_split) + " interior edges split, " +
@@ -164,7 +163,7 @@ class Pipeline {
     CurveResult<MeshT> out;
     // 1. Ideal mesh: the linear mesh elevated, straight-sided (6.2.1).
     auto t0 = Clock::now();
-    mesh_ = elevate(without_flat_corners(linear), o_.p);
+    mesh_ = elevate(without_flat_corners(linear, out.flat_corners), o_.p);
     straight_ = mesh_.nodes();
     const double t_elevate = since(t0);
     out.stages.push_back(linear_stage(t_elevate));

@@ -60,6 +60,7 @@
 #include "hom/element/cube.hpp"
 #include "hom/element/simplex.hpp"
 #include "hom/io/msh_data.hpp"
+#include "hom/mesh/flat_corners.hpp"
 #include "hom/mesh/mesh.hpp"
 #include "hom/nodes/warp_blend.hpp"
 #include "hom/optimize/certified.hpp"
@@ -143,6 +144,8 @@ struct CurveResult {
   std::vector<bool> element_valid;
   /// The certificate (CurveOptions::certify), element numbers those of `mesh`.
   std::optional<CertificationOutcome> certification;
+  /// What the flat-corner split did to the linear mesh (CurveOptions::split_flat_corners).
+  FlatCornerSplit flat_corners;
   /// inverted == 0 and conformity.ok, and with CurveOptions::certify every
   /// element certified valid.
   bool valid = false;

@@ -9,9 +9,11 @@
 /// along one of the d edges from it). If all d edges from vertex a lie on one
 /// smooth boundary entity (a curve in 2D, a surface in 3D: each edge is an
 /// edge of a boundary facet classified on that entity), then once they are
-/// curved onto it their tangents lie in its tangent line / plane at a, so
-/// det(D phi(a)) = 0, whatever the free nodes do: the optimizer (chapter 4)
-/// and any repair that moves interior nodes cannot make the element valid.
+/// curved onto it their tangents lie in its tangent line / plane at a (up to
+/// the interpolation error of the curved edges), so det(D phi(a)) is zero
+/// or nearly so, with a sign the boundary alone sets, whatever the free
+/// nodes do: the optimizer (chapter 4) and any repair that moves interior
+/// nodes cannot make the element valid.
 /// A tetrahedron with two faces on the same surface (a linear mesher makes
 /// them at a reflex edge of the surface triangulation, and on thin parts) has
 /// two such corners; a triangle with two edges on one curve, one.
