@@ -582,3 +582,32 @@ TEST_CASE("split_flat_corners: a tetrahedron with every edge on the boundary is 
   for (const auto& bf : mesh.boundary_facets()) owners.insert(bf.element);
   CHECK(owners.size() == 4);  // one facet per child
 }
+
+TEST_CASE("split_flat_corners: corners on several nearly coplanar patches are flat too") {
+  // A flat octahedron (poles at z = +-0.1) around the axis a-b, every face
+  // on a surface of its own: the faces around each equatorial vertex are
+  // within 17 degrees of coplanar, as the patches of one smooth surface are.
+  Eigen::Matrix3Xd x(3, 6);
+  x << 0, 0, 1, 0, -1, 0,  //
+      0, 0, 0, 1, 0, -1,   //
+      0.1, -0.1, 0, 0, 0, 0;
+  Eigen::MatrixXi t(4, 4);
+  for (int i = 0; i < 4; ++i) t.col(i) << 1, 0, 2 + i, 2 + (i + 1) % 4;
+  Mesh<Simplex<3>> mesh(1, x, t);
+  std::vector<std::pair<std::vector<int>, int>> facets;
+  for (int i = 0; i < 4; ++i)
+    for (int pole : {0, 1}) facets.push_back({{pole, 2 + i, 2 + (i + 1) % 4}, 1 + 2 * i + pole});
+  add_boundary_facets(mesh, facets);
+  CHECK(find_flat_corners(mesh).size() == 8);  // both equatorial corners of each
+  const auto s = split_flat_corners(mesh);
+  CHECK(s.edges_split == 1);
+  CHECK(mesh.num_elements() == 8);
+  CHECK(find_flat_corners(mesh).empty());
+  check_facet_owners(mesh);
+
+  // The same with the poles at +-1: the faces meet at 70 degrees, a crease.
+  x.row(2) << 1, -1, 0, 0, 0, 0;
+  Mesh<Simplex<3>> creased(1, x, t);
+  add_boundary_facets(creased, facets);
+  CHECK(find_flat_corners(creased).empty());
+}

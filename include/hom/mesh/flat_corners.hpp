@@ -8,7 +8,9 @@
 /// element's edges there (each column of D phi at a vertex is the derivative
 /// along one of the d edges from it). If all d edges from vertex a lie on one
 /// smooth boundary entity (a curve in 2D, a surface in 3D: each edge is an
-/// edge of a boundary facet classified on that entity), then once they are
+/// edge of a boundary facet classified on that entity), or on patches of one
+/// smooth surface (boundary facets of several entities, nearly coplanar
+/// around a), then once they are
 /// curved onto it their tangents lie in its tangent line / plane at a (up to
 /// the interpolation error of the curved edges), so det(D phi(a)) is zero
 /// or nearly so, with a sign the boundary alone sets, whatever the free
@@ -31,6 +33,7 @@
 /// src/cad/quad_ears.hpp.
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <map>
 #include <optional>
@@ -50,53 +53,93 @@ namespace detail {
 using MeshEdge = std::pair<int, int>;
 inline MeshEdge mesh_edge(int a, int b) { return a < b ? MeshEdge{a, b} : MeshEdge{b, a}; }
 
-/// Entity tags of the boundary facets each boundary edge belongs to.
+/// The boundary facets (indices into mesh.boundary_facets()) each boundary
+/// edge belongs to.
 template <int D, NodeSet Nodes>
-std::map<MeshEdge, std::vector<int>> boundary_edge_entities(const Mesh<Simplex<D>, Nodes, D>& mesh) {
+std::map<MeshEdge, std::vector<int>> boundary_edge_facets(const Mesh<Simplex<D>, Nodes, D>& mesh) {
   std::map<MeshEdge, std::vector<int>> out;
-  for (const auto& f : mesh.boundary_facets())
+  const auto& facets = mesh.boundary_facets();
+  for (int k = 0; k < int(facets.size()); ++k)
     for (int i = 0; i < D; ++i)
-      for (int j = i + 1; j < D; ++j) {
-        auto& tags = out[mesh_edge(f.vertices[i], f.vertices[j])];
-        if (std::find(tags.begin(), tags.end(), f.entity_tag) == tags.end()) tags.push_back(f.entity_tag);
-      }
+      for (int j = i + 1; j < D; ++j) out[mesh_edge(facets[k].vertices[i], facets[k].vertices[j])].push_back(k);
   return out;
+}
+
+/// Unit normal of a straight boundary facet (either orientation).
+template <int D, NodeSet Nodes>
+Eigen::Matrix<double, D, 1> facet_normal(const Mesh<Simplex<D>, Nodes, D>& mesh, const BoundaryFacet<Simplex<D>>& f) {
+  if constexpr (D == 2) {
+    const Eigen::Vector2d t = mesh.node(f.vertices[1]) - mesh.node(f.vertices[0]);
+    return Eigen::Vector2d(-t[1], t[0]).normalized();
+  } else {
+    const Eigen::Vector3d x0 = mesh.node(f.vertices[0]);
+    return (Eigen::Vector3d(mesh.node(f.vertices[1])) - x0).cross(Eigen::Vector3d(mesh.node(f.vertices[2])) - x0).normalized();
+  }
 }
 
 }  // namespace detail
 
 /// A flat corner of a simplex: local vertex `vertex` of element `element`,
-/// whose d edges all lie on boundary entity `entity` (see above).
+/// whose d edges all lie on boundary entity `entity` (see above), or on
+/// boundary facets of several entities that are within
+/// `flat_corner_max_angle` of coplanar there (patches of one smooth surface,
+/// such as the two halves of a wing's leading edge; `entity` is then one of
+/// them).
 struct FlatCorner {
   int element = 0;
   int vertex = 0;
   int entity = 0;
 };
 
+/// The largest angle between the straight boundary facets around a corner
+/// on several entities for it to count as flat (30 degrees): on a smooth
+/// surface the facets' normals approach the surface's as the mesh is
+/// refined, and a split where the surface has a crease only adds an
+/// interior node.
+inline constexpr double flat_corner_max_angle = 0.5235987755982988;
+
 /// The flat corners of a linear simplex mesh (planar triangles or
 /// tetrahedra), from its boundary facets and their entity tags.
 template <int D, NodeSet Nodes>
 std::vector<FlatCorner> find_flat_corners(const Mesh<Simplex<D>, Nodes, D>& mesh) {
-  const auto on_boundary = detail::boundary_edge_entities(mesh);
+  const auto on_boundary = detail::boundary_edge_facets(mesh);
+  const auto& facets = mesh.boundary_facets();
+  const double min_cos = std::cos(flat_corner_max_angle);
   std::vector<FlatCorner> out;
   for (int e = 0; e < mesh.num_elements(); ++e)
     for (int a = 0; a <= D; ++a) {
-      // The entities shared by every edge from vertex a.
+      // The facets of the edges from vertex a, and the entities every edge has.
+      std::vector<int> around;
       std::optional<std::vector<int>> common;
-      for (int b = 0; b <= D && (!common || !common->empty()); ++b) {
+      bool all_on_boundary = true;
+      for (int b = 0; b <= D && all_on_boundary; ++b) {
         if (b == a) continue;
         const auto it = on_boundary.find(detail::mesh_edge(mesh.vertex(e, a), mesh.vertex(e, b)));
         if (it == on_boundary.end()) {
-          common = std::vector<int>{};
+          all_on_boundary = false;
           break;
         }
-        if (!common) {
-          common = it->second;
-          continue;
+        std::vector<int> tags;
+        for (int k : it->second) {
+          around.push_back(k);
+          tags.push_back(facets[k].entity_tag);
         }
-        std::erase_if(*common, [&](int t) { return std::find(it->second.begin(), it->second.end(), t) == it->second.end(); });
+        if (!common)
+          common = tags;
+        else
+          std::erase_if(*common, [&](int t) { return std::find(tags.begin(), tags.end(), t) == tags.end(); });
       }
-      if (common && !common->empty()) out.push_back({e, a, common->front()});
+      if (!all_on_boundary) continue;
+      if (!common->empty()) {
+        out.push_back({e, a, common->front()});
+        continue;
+      }
+      bool coplanar = true;
+      for (std::size_t i = 0; i < around.size() && coplanar; ++i)
+        for (std::size_t j = i + 1; j < around.size() && coplanar; ++j)
+          coplanar = std::abs(detail::facet_normal(mesh, facets[around[i]])
+                                  .dot(detail::facet_normal(mesh, facets[around[j]]))) >= min_cos;
+      if (coplanar) out.push_back({e, a, facets[around.front()].entity_tag});
     }
   return out;
 }
@@ -123,7 +166,7 @@ FlatCornerSplit split_flat_corners(Mesh<Simplex<D>, Nodes, D>& mesh) {
   out.corners = int(corners.size());
   if (corners.empty()) return out;
 
-  const auto on_boundary = detail::boundary_edge_entities(mesh);
+  const auto on_boundary = detail::boundary_edge_facets(mesh);
   std::vector<std::array<int, D + 1>> elements(mesh.num_elements());
   for (int e = 0; e < mesh.num_elements(); ++e)
     for (int k = 0; k <= D; ++k) elements[e][k] = mesh.vertex(e, k);
