@@ -457,6 +457,26 @@ void check_facet_owners(const Mesh<Simplex<D>>& mesh) {
   }
 }
 
+// An octahedron with poles a = (0, 0, h), b = (0, 0, -h) and equator
+// p0..p3 on the unit circle, cut into the four tetrahedra (b, a, p_i,
+// p_i+1) around its axis a-b; face (pole, p_i, p_i+1) on surface tag(i, pole).
+template <class Tag>
+Mesh<Simplex<3>> octahedron(double h, Tag tag) {
+  Eigen::Matrix3Xd x(3, 6);
+  x << 0, 0, 1, 0, -1, 0,  //
+      0, 0, 0, 1, 0, -1,   //
+      h, -h, 0, 0, 0, 0;
+  Eigen::MatrixXi t(4, 4);
+  for (int i = 0; i < 4; ++i) t.col(i) << 1, 0, 2 + i, 2 + (i + 1) % 4;
+  Mesh<Simplex<3>> mesh(1, x, t);
+  for (int e = 0; e < 4; ++e) REQUIRE(signed_volume(mesh, e) > 0);
+  std::vector<std::pair<std::vector<int>, int>> facets;
+  for (int i = 0; i < 4; ++i)
+    for (int pole : {0, 1}) facets.push_back({{pole, 2 + i, 2 + (i + 1) % 4}, tag(i, pole)});
+  add_boundary_facets(mesh, facets);
+  return mesh;
+}
+
 }  // namespace
 
 TEST_CASE("split_flat_corners: a tetrahedron with two faces on one surface is split across its interior edge") {
@@ -465,18 +485,7 @@ TEST_CASE("split_flat_corners: a tetrahedron with two faces on one surface is sp
   // a surface of its own, so
   // the tetrahedron (a, b, p0, p1) has flat corners at p0 and p1: their
   // three edges are all on surface 1.
-  Eigen::Matrix3Xd x(3, 6);
-  x << 0, 0, 1, 0, -1, 0,  //
-      0, 0, 0, 1, 0, -1,   //
-      1, -1, 0, 0, 0, 0;
-  Eigen::MatrixXi t(4, 4);
-  for (int i = 0; i < 4; ++i) t.col(i) << 1, 0, 2 + i, 2 + (i + 1) % 4;
-  Mesh<Simplex<3>> mesh(1, x, t);
-  for (int e = 0; e < 4; ++e) REQUIRE(signed_volume(mesh, e) > 0);
-  std::vector<std::pair<std::vector<int>, int>> facets;
-  for (int i = 0; i < 4; ++i)
-    for (int pole : {0, 1}) facets.push_back({{pole, 2 + i, 2 + (i + 1) % 4}, i == 0 ? 1 : 10 + 2 * i + pole});
-  add_boundary_facets(mesh, facets);
+  auto mesh = octahedron(1.0, [](int i, int pole) { return i == 0 ? 1 : 10 + 2 * i + pole; });
   for (int i = 0; i < 6; ++i) mesh.node_class(i) = {NodeKind::on_entity, EntityId{2, 2}, 0, {}};
 
   const auto corners = find_flat_corners(mesh);
@@ -587,17 +596,8 @@ TEST_CASE("split_flat_corners: corners on several nearly coplanar patches are fl
   // A flat octahedron (poles at z = +-0.1) around the axis a-b, every face
   // on a surface of its own: the faces around each equatorial vertex are
   // within 17 degrees of coplanar, as the patches of one smooth surface are.
-  Eigen::Matrix3Xd x(3, 6);
-  x << 0, 0, 1, 0, -1, 0,  //
-      0, 0, 0, 1, 0, -1,   //
-      0.1, -0.1, 0, 0, 0, 0;
-  Eigen::MatrixXi t(4, 4);
-  for (int i = 0; i < 4; ++i) t.col(i) << 1, 0, 2 + i, 2 + (i + 1) % 4;
-  Mesh<Simplex<3>> mesh(1, x, t);
-  std::vector<std::pair<std::vector<int>, int>> facets;
-  for (int i = 0; i < 4; ++i)
-    for (int pole : {0, 1}) facets.push_back({{pole, 2 + i, 2 + (i + 1) % 4}, 1 + 2 * i + pole});
-  add_boundary_facets(mesh, facets);
+  auto own_surface = [](int i, int pole) { return 1 + 2 * i + pole; };
+  auto mesh = octahedron(0.1, own_surface);
   CHECK(find_flat_corners(mesh).size() == 8);  // both equatorial corners of each
   const auto s = split_flat_corners(mesh);
   CHECK(s.edges_split == 1);
@@ -606,8 +606,5 @@ TEST_CASE("split_flat_corners: corners on several nearly coplanar patches are fl
   check_facet_owners(mesh);
 
   // The same with the poles at +-1: the faces meet at 70 degrees, a crease.
-  x.row(2) << 1, -1, 0, 0, 0, 0;
-  Mesh<Simplex<3>> creased(1, x, t);
-  add_boundary_facets(creased, facets);
-  CHECK(find_flat_corners(creased).empty());
+  CHECK(find_flat_corners(octahedron(1.0, own_surface)).empty());
 }
