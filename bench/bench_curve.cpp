@@ -45,7 +45,11 @@
 /// fail with two quadrilaterals whose two edges at a corner lie on one CAD
 /// curve (det = 0 there whatever the free nodes do); the quad mesher now
 /// splits such "ears" (src/cad/quad_ears.hpp), and plate_quad's 708
-/// quadrilaterals are certified valid at p = 3 and 4.
+/// quadrilaterals are certified valid at p = 3 and 4. With --certify, each
+/// tetrahedral result also goes through Gmsh's own validity analysis
+/// (gmsh_validity.hpp; --no-peer skips it), and the claim that Gmsh and hom
+/// agree on every element hom decides is checked (issue 8's cross-check on
+/// the CAD cases).
 ///
 /// Exit status: 0 when every case gives a valid mesh, 1 when a case is
 /// invalid or fails (the error is printed and recorded), 2 on bad options.
@@ -67,6 +71,8 @@
 #include "cad_model.hpp"
 #include "curve_mesh.hpp"
 #include "curve_models.hpp"
+#include "gmsh_model.hpp"
+#include "gmsh_validity.hpp"
 #include "harness.hpp"
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
@@ -107,6 +113,7 @@ struct Settings {
   bool quick = false;
   int iterations_after_valid = 5;
   bool certify = false;  ///< CurveOptions::certify: certify-and-repair after the last stage
+  bool gmsh_peer = true;  ///< with certify: Gmsh's validity analysis of each tetrahedral result beside hom's
 };
 
 const char* kind_name(Kind k) {
@@ -194,6 +201,8 @@ class Runner {
                       "(stop: %s), %.2f s\n",
                       c->valid, c->invalid, c->undecided, c->initial_valid, c->initial_invalid, c->initial_undecided,
                       c->rounds, std::string(to_string(c->reason)).c_str(), c->time_s);
+        if constexpr (F::dim == 3)
+          if (r.certification && s_.gmsh_peer) compare_with_gmsh(c.name, p, r.mesh);
         const std::string claim = c.name + " p = " + std::to_string(p) +
                                   ": valid (0 inverted at quadrature points, det > 0 at the nodes, boundary on the CAD)";
         if (!r.conformity.ok) std::printf("   %s\n", r.conformity.problem.c_str());
@@ -215,6 +224,23 @@ class Runner {
         checks_.expect(false, c.name + " p = " + std::to_string(p) + ": " + e.what());
       }
     }
+  }
+
+  /// Issue 8's cross-check on the CAD cases: Gmsh's Plugin(AnalyseMeshQuality)
+  /// and hom's certificate (Bernstein bounds) on the final tetrahedral mesh,
+  /// element by element; the result goes to the last case's "peer".
+  void compare_with_gmsh(const std::string& name, int p, const hom::Mesh<hom::Simplex<3>>& mesh) {
+    const hom::meshing::GmshSession session;
+    const auto certificate = hom::certify_mesh(mesh);
+    const auto peer = hom::bench::compare_with_gmsh(mesh, certificate, "hom_curve_" + name + "_p" + std::to_string(p));
+    std::printf("   gmsh %s Plugin(AnalyseMeshQuality): %d invalid (hom certified invalid %d, undecided %d), "
+                "disagreements %d, %.2f s\n",
+                peer.gmsh.version.c_str(), peer.invalid, certificate.invalid, certificate.undecided,
+                peer.disagreements(), peer.gmsh.time_s);
+    checks_.expect(peer.disagreements() == 0, name + " p = " + std::to_string(p) +
+                                                  ": Gmsh's Plugin(AnalyseMeshQuality) and hom agree on every "
+                                                  "element hom decides");
+    cases_.back().set("peer", hom::bench::peer_json(peer));
   }
 
   void report(const Case& c, const hom::cad::CadModel& cad, const std::string& family, int p,
@@ -364,6 +390,7 @@ int main(int argc, char** argv) {
   Settings s;
   std::vector<std::string> names;
   std::string degrees, json, data;
+  bool no_peer = false;
   po::options_description desc(
       "bench_curve [options]: chapter 6's a posteriori pipeline on the built-in cases and the real CAD\n"
       "files of ../shared/data/cad (see the file comment)");
@@ -381,7 +408,8 @@ int main(int argc, char** argv) {
        "volume / planar stage: stop once valid this many iterations (-1: optimize to convergence)")  //
       ("certify", po::bool_switch(&s.certify),
        "certify det > 0 everywhere in each element (Bernstein bounds) and repair folds between the quadrature "
-       "points, as hom curve --certify");
+       "points, as hom curve --certify; tetrahedral results are also analysed by Gmsh (see --no-peer)")  //
+      ("no-peer", po::bool_switch(&no_peer), "with --certify: skip Gmsh's validity analysis of the results");
   std::vector<int> forced;
   try {
     po::variables_map vm;
@@ -392,6 +420,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     s.out = vm["out"].as<std::string>();
+    s.gmsh_peer = !no_peer;
     if (!degrees.empty()) forced = parse_degrees(degrees);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_curve: %s\n", e.what());
