@@ -151,7 +151,7 @@ class Pipeline {
       s = split_flat_corners(out);
       if (s.corners > 0)
         say("linear mesh: " + std::to_string(s.corners) + " flat corners (every edge there on one CAD " +
-            (volume ? "face" : "curve") + "): " + std::to_string(s.edges_split) + " interior edges split, " +
+            (volume ? "face" : "curve") + ", or on nearly coplanar ones): " + std::to_string(s.edges_split) + " interior edges split, " +
             std::to_string(s.centroid_splits) + " elements split at their centroid; " +
             std::to_string(out.num_elements()) + " elements");
     }
