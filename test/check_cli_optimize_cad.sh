@@ -8,7 +8,8 @@
 # hom evaluates it; the file's vertices too), the
 # report in DESIGN.md's schema. With --certify every element is certified
 # valid and the report says so. A tangled start (0.04 rad) is untangled; a
-# refused result names its folded element. A linear mesh, options that do not apply on a
+# corner fold (0.02 rad) is refused with its element named, or, with
+# --certify, repaired. A linear mesh, options that do not apply on a
 # CAD model, a missing model and a surface mesh without --cad are refused
 # with the documented exit status and no output.
 #   $1 = hom
@@ -42,7 +43,7 @@ final=$(json_field "$work/opt.json" optimized min_q) || fail "json: no optimized
   || fail "json: boundary nodes off the CAD"
 "$py" "$helper" check "$work/opt.msh" 1e-9 1e-2 || fail "optimized nodes are not on the sphere"
 
-# 2. --certify: each element, projected on its facet's plane, certified valid
+# 2. --certify: each element, projected along its mean surface normal, certified valid
 # (Bernstein bounds); the report carries the certificate, and for a surface
 # mesh no scaled-Jacobian bound (that would be the projection's).
 log=$("$hom" optimize "$work/perturbed.msh" --cad "$work/sphere.brep" -o "$work/cert.msh" --json "$work/cert.json" \
@@ -60,10 +61,11 @@ grep -q "^  NOT CERTIFIED" <<<"$log" && fail "optimize --cad --certify: prints N
 
 # 2b. Larger rotations. At 0.04 rad 49 elements are tangled; the surface
 # stage untangles them with p-continuation (appendix C on the surface):
-# exit 0, nothing inverted. At 0.02 rad one element folds at a
-# corner node, which the surface stage does not repair yet (issue 6): if the
-# result is refused (exit 3), nothing is written and the message names the
-# folded element with its centroid.
+# exit 0, nothing inverted. At 0.02 rad the optimized mesh folds one element
+# at a corner node, between the quadrature points: without --certify the
+# refusal (exit 3, nothing written) names the folded element with its
+# centroid; with --certify the surface repair (surface/certified_surface.hpp)
+# slides its nodes on the sphere until every element is certified valid.
 "$py" "$helper" perturb "$work/curved.msh" "$work/tangled.msh" 0.04 || fail "could not perturb the mesh by 0.04"
 log=$("$hom" optimize "$work/tangled.msh" --cad "$work/sphere.brep" -o "$work/untangled.msh" \
         --json "$work/untangled.json" --threads 1 2>&1); rc=$?
@@ -74,12 +76,20 @@ echo "$log" | sed 's/^/  [sphere p=3, 0.04 rad] /'
 "$py" "$helper" perturb "$work/curved.msh" "$work/folded.msh" 0.02 || fail "could not perturb the mesh by 0.02"
 log=$("$hom" optimize "$work/folded.msh" --cad "$work/sphere.brep" -o "$work/folded_opt.msh" --threads 1 2>&1); rc=$?
 echo "$log" | sed 's/^/  [sphere p=3, 0.02 rad] /'
-if [[ $rc -eq 3 ]]; then
-  [[ ! -e "$work/folded_opt.msh" ]] || fail "0.02 rad: an invalid mesh was written"
-  grep -Eq "^  element [0-9]+: centroid \(" <<<"$log" || fail "0.02 rad: the refusal does not name the folded element"
-elif [[ $rc -ne 0 ]]; then
-  fail "optimize --cad at 0.02 rad: exit $rc"
-fi
+[[ $rc -eq 3 ]] || fail "optimize --cad at 0.02 rad without --certify: exit $rc, expected 3 (a fold at a node)"
+[[ ! -e "$work/folded_opt.msh" ]] || fail "0.02 rad: an invalid mesh was written"
+grep -Eq "^  element [0-9]+: centroid \(" <<<"$log" || fail "0.02 rad: the refusal does not name the folded element"
+log=$("$hom" optimize "$work/folded.msh" --cad "$work/sphere.brep" -o "$work/repaired.msh" --certify \
+        --json "$work/repaired.json" --threads 1 2>&1); rc=$?
+echo "$log" | sed 's/^/  [sphere p=3, 0.02 rad, --certify] /'
+[[ $rc -eq 0 ]] || fail "optimize --cad --certify at 0.02 rad: exit $rc"
+[[ $(json_field "$work/repaired.json" optimized initial_certified_invalid) -gt 0 ]] \
+  || fail "0.02 rad: the optimized mesh was certified valid before the repair (the premise)"
+[[ $(json_field "$work/repaired.json" optimized certify_rounds) -ge 1 ]] || fail "0.02 rad: no repair round ran"
+[[ $(json_field "$work/repaired.json" optimized certified_invalid) -eq 0 ]] || fail "0.02 rad: certified invalid elements remain"
+[[ $(json_field "$work/repaired.json" optimized undecided) -eq 0 ]] || fail "0.02 rad: undecided elements remain"
+[[ $(json_field "$work/repaired.json" optimized inverted) -eq 0 ]] || fail "0.02 rad: inverted elements after the repair"
+"$py" "$helper" check "$work/repaired.msh" 1e-9 1e-2 || fail "0.02 rad: repaired nodes are not on the sphere"
 
 # 3. Refusals: exit 2 (usage) or 1 (unreadable model), nothing written.
 "$py" "$helper" linear "$work/linear.msh" || fail "could not write a linear sphere mesh"

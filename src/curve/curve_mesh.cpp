@@ -24,6 +24,7 @@
 #include "hom/mesh/elevate.hpp"
 #include "hom/optimize/optimize.hpp"
 #include "hom/quality/mesh_quality.hpp"
+#include "hom/surface/certified_surface.hpp"
 #include "hom/surface/optimize_surface.hpp"
 #include "hom/surface/surface_mesh_quality.hpp"
 
@@ -265,10 +266,10 @@ class Pipeline {
     out.conformity = check_on_cad<Family, SpaceDim>(mesh_, cad_, o_.tolerance * cad_.size());
     out.valid = out.inverted == 0 && out.conformity.ok;
     if (o_.certify) {
-      if constexpr (surface) certification_ = certify_faces();
+      if constexpr (surface) certification_ = face_certification_;
+      if (!certification_) certification_ = certification_outcome(std::vector<ElementCertificate<PF>>{}, RepairStop::certified);
       const auto& c = *certification_;
-      say("certified: " + std::to_string(c.valid) + " valid, " + std::to_string(c.invalid) + " invalid, " +
-          std::to_string(c.undecided) + " undecided (" + fmt_s(c.time_s) + ")");
+      say_certificate(part(), c);
       out.valid = out.valid && c.certified();
       out.certification = std::move(certification_);
     }
@@ -280,38 +281,6 @@ class Pipeline {
     co.max_depth = o_.certify_depth;
     co.threads = o_.threads;
     return co;
-  }
-
-  /// A surface mesh's certificate, of the element a solver reads: the degree-p
-  /// polynomial through the nodes in R^3, x(xi), projected on the plane of its
-  /// straight-sided facet, oriented as the face's S_u x S_v
-  /// (build_face_meshes). det [x_xi, x_eta, N] is then a polynomial
-  /// certified as a planar element's. Certified valid means the element's
-  /// tangent plane never turns over against N, so it has no fold; a
-  /// negative value means a fold, or an element turning by more than 90
-  /// degrees away from its facet. (The map S o u of chapter 5 is not
-  /// certified: at a pole, where S_u = 0, one (u, v) per node folds it near
-  /// the pole for any polynomial u, although x(xi) is fine there.)
-  CertificationOutcome certify_faces() const {
-    const auto t0 = Clock::now();
-    const CertifyOptions co = certify_options();
-    const auto& jb = jacobian_bernstein<PF, WarpBlend>(o_.p);
-    std::vector<ElementCertificate<PF>> certificates(mesh_.num_elements());
-    for (const auto& fm : face_meshes_)
-      for (int e = 0; e < fm.mesh.num_elements(); ++e) {
-        const auto X = fm.mesh.element_coordinates(e);
-        const Eigen::Vector3d x0 = X.col(0), x1 = X.col(1), x2 = X.col(2);
-        const Eigen::Vector3d normal = PF::is_simplex ? (x1 - x0).cross(x2 - x0) : (x2 - x0).cross(X.col(3) - x1);
-        Eigen::Matrix<double, 2, 3> frame;
-        frame.row(0) = (x1 - x0).normalized().transpose();
-        frame.row(1) = normal.normalized().cross((x1 - x0).normalized()).transpose();
-        const Eigen::Matrix<double, 2, Eigen::Dynamic> projected = frame * X;
-        certificates[fm.patch[e]] = certify_element<PF>(jb, projected, co);
-      }
-    CertificationOutcome c = certification_outcome(certificates, RepairStop::not_repaired);
-    c.projected = true;
-    c.time_s = since(t0);
-    return c;
   }
 
   static const char* part() { return volume ? "volume" : planar ? "planar" : "surface"; }
@@ -789,24 +758,32 @@ class Pipeline {
     return int(all.size());
   }
 
+  /// The face stage's options (chapter 5 on one CAD face).
+  OptimizeOptions face_options() const {
+    OptimizeOptions opt;
+    opt.solver = SolverKind::newton;
+    opt.ideal = IdealKind::straight_sided;
+    opt.threads = o_.threads;
+    opt.max_iterations = o_.surface_max_iterations;
+    opt.verbose = o_.verbose;
+    return opt;
+  }
+
   StageReport optimize_faces() {
     const auto t0 = Clock::now();
     int iterations = 0, not_converged = 0;
     bool continued = false;
     std::string reason = "none";
-    if (o_.optimize_surface) {
-      for (auto& fm : face_meshes_) {
-        const auto free = surface_free_node_mask(fm.mesh);
-        if (std::none_of(free.begin(), free.end(), [](bool b) { return b; })) continue;
-        OptimizeOptions opt;
-        opt.solver = SolverKind::newton;
-        opt.ideal = IdealKind::straight_sided;
-        opt.threads = o_.threads;
-        opt.max_iterations = o_.surface_max_iterations;
-        opt.verbose = o_.verbose;
+    std::optional<CertificationOutcome> certification;
+    for (auto& fm : face_meshes_) {
+      const auto free = surface_free_node_mask(fm.mesh);
+      const bool movable = std::any_of(free.begin(), free.end(), [](bool b) { return b; });
+      OptimizeOptions opt = face_options();
+      const auto& s = surfaces_.at(fm.face);
+      const Eigen::Matrix2Xd uv_start = fm.uv;
+      if (o_.optimize_surface && movable) {
         // Bounded parameters: a node that the blending put a hair outside
         // the face's parameter box would make the objective +inf.
-        const auto& s = surfaces_.at(fm.face);
         for (int k = 0; k < fm.mesh.num_nodes(); ++k)
           if (free[k])
             for (int a = 0; a < 2; ++a) fm.uv(a, k) = s.range(a).normalize(fm.uv(a, k));
@@ -819,9 +796,23 @@ class Pipeline {
         continued = continued || r.continuation.has_value();
         not_converged += !r.result.converged;
         reason = std::string(to_string(r.result.reason));
+      }
+      if (o_.certify) {
+        // Certification and repair of the face (surface/certified_surface.hpp):
+        // a fold between the quadrature points, at a corner node say, is
+        // mended here, where the face nodes can still slide on the CAD.
+        CertifyRepairOptions ro;
+        ro.certify = certify_options();
+        ro.max_rounds = o_.optimize_surface && movable ? o_.certify_rounds : 0;
+        const Eigen::Matrix2Xd* start = o_.optimize_surface ? &uv_start : nullptr;
+        const CertificationOutcome c = certify_and_repair_surface<Measure, DefaultExactness>(
+            fm.mesh, s, fm.uv, surface_ideals(fm.mesh, opt.ideal), opt.solver_options(), ro, o_.threads,
+            opt.regularization_alpha, measure_, start);
+        merge_face_certificate(certification, c, fm.patch);
+      }
+      if (o_.optimize_surface && movable)
         for (int k = 0; k < fm.mesh.num_nodes(); ++k)
           if (free[k]) set_face_node(fm.global[k], fm.face, fm.uv.col(k));
-      }
     }
     const double t = since(t0);
     StageReport r = surface_stage("optimized");
@@ -831,7 +822,47 @@ class Pipeline {
     r.stop_reason = reason;
     r.faces_not_converged = not_converged;
     r.p_continuation = continued;
+    if (certification) {
+      if constexpr (!surface) say_certificate("CAD faces", *certification);  // a surface mesh's is the final one
+      face_certification_ = std::move(certification);
+    }
     return r;
+  }
+
+  /// Adds one face's certification to the faces' so far; `patch` maps the
+  /// face mesh's elements to the mesh's patches (elements of a surface mesh).
+  static void merge_face_certificate(std::optional<CertificationOutcome>& all, const CertificationOutcome& face,
+                                     const std::vector<int>& patch) {
+    if (!all) {
+      all.emplace();
+      all->projected = true;
+    }
+    CertificationOutcome& a = *all;
+    a.initial_valid += face.initial_valid;
+    a.initial_invalid += face.initial_invalid;
+    a.initial_undecided += face.initial_undecided;
+    a.valid += face.valid;
+    a.invalid += face.invalid;
+    a.undecided += face.undecided;
+    a.rounds += face.rounds;
+    a.pull_backs += face.pull_backs;
+    a.sentinel_points = std::max(a.sentinel_points, face.sentinel_points);
+    if (a.reason == RepairStop::certified) a.reason = face.reason;
+    a.restored = a.restored || face.restored;
+    for (int e : face.uncertified) a.uncertified.push_back(patch[e]);
+    std::sort(a.uncertified.begin(), a.uncertified.end());
+    a.repairs.insert(a.repairs.end(), face.repairs.begin(), face.repairs.end());
+    a.time_s += face.time_s;
+  }
+
+  void say_certificate(const std::string& what, const CertificationOutcome& c) const {
+    std::string line = what + " certified: " + std::to_string(c.valid) + " valid, " + std::to_string(c.invalid) +
+                       " invalid, " + std::to_string(c.undecided) + " undecided";
+    if (c.rounds > 0)
+      line += " (before repair " + std::to_string(c.initial_invalid) + " invalid, " +
+              std::to_string(c.initial_undecided) + " undecided; " + std::to_string(c.rounds) + " repair rounds" +
+              (c.restored ? ", undone" : "") + ")";
+    say(line + " (" + fmt_s(c.time_s) + ")");
   }
 
   /// Whether some element of the face mesh is invalid (against its
@@ -904,6 +935,7 @@ class Pipeline {
   std::vector<FacePatchMesh> face_meshes_;
   MeshQuality final_;
   std::optional<CertificationOutcome> certification_;  ///< CurveOptions::certify
+  std::optional<CertificationOutcome> face_certification_;  ///< the CAD faces', with CurveOptions::certify
 };
 
 }  // namespace

@@ -15,7 +15,7 @@ namespace hom::tools {
 
 inline void print_certification(const CertificationOutcome& c, int max_depth) {
   std::printf("certified (Bernstein bounds of det D phi_P, subdivision depth <= %d%s):\n", max_depth,
-              c.projected ? ", each surface element projected on its facet's plane" : "");
+              c.projected ? ", each surface element projected along its nodes' mean surface normal" : "");
   std::printf("  after optimization: %d certified valid, %d certified invalid, %d undecided\n", c.initial_valid,
               c.initial_invalid, c.initial_undecided);
   if (c.rounds > 0) {

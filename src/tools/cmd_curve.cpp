@@ -29,9 +29,11 @@
 // CAD entity at its parameters. An invalid result writes nothing. --certify
 // adds certification (issue 8): the sign of det D phi_P bounded everywhere in
 // each element (Bernstein coefficients), folds between quadrature points
-// repaired by moving interior nodes (optimize/certified.hpp); a surface mesh
-// is certified element by element, each projected on its facet's plane,
-// without repair. An uncertified result is invalid.
+// repaired by moving interior nodes (optimize/certified.hpp). The CAD faces
+// (every face of a surface mesh, the boundary faces of a volume mesh) are
+// certified element by element, each projected along its nodes' mean
+// surface normal, and their folds repaired by sliding face nodes on the
+// surface (surface/certified_surface.hpp). An uncertified result is invalid.
 //
 // --bl-first adds a curved boundary layer of stretched tetrahedra on the wall
 // faces (thesis section 6.3.3, cad_boundary_layer.hpp): the linear mesh gets

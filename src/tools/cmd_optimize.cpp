@@ -31,8 +31,9 @@
 // certificate of the result is printed and added to the JSON with hom quality
 // --certify's keys. With --cad the same stage runs on the volume or planar
 // mesh after the CAD pipeline; a surface mesh is certified element by
-// element, each projected on its facet's plane, without repair
-// (curve_mesh.hpp), and an uncertified result is not written.
+// element, each projected along its nodes' mean surface normal, and its
+// folds are repaired by sliding face nodes on the CAD surface
+// (surface/certified_surface.hpp); an uncertified result is not written.
 //
 // Exit status: 0 the optimized mesh is valid at every quadrature point (with
 // --certify: every element certified valid), 3 otherwise (the outputs are
