@@ -309,7 +309,7 @@ TEST_CASE("certify: a surface element folded in its face's (u, v) is certified i
   REQUIRE(curved.valid);
   cad::CurveOptions o = options(3);
   o.certify = true;
-  o.optimize_surface = false;  // certify what is given: surfaces have no repair stage
+  o.optimize_surface = false;  // certify what is given: no surface optimization, so no repair either
   const auto good = cad::optimize_on_cad<Simplex<2>, 3>(m, curved.mesh, o);
   REQUIRE(good.certification);
   CHECK(good.certification->projected);

@@ -803,11 +803,12 @@ class Pipeline {
         // mended here, where the face nodes can still slide on the CAD.
         CertifyRepairOptions ro;
         ro.certify = certify_options();
-        ro.max_rounds = o_.optimize_surface && movable ? o_.certify_rounds : 0;
-        const Eigen::Matrix2Xd* start = o_.optimize_surface ? &uv_start : nullptr;
-        const CertificationOutcome c = certify_and_repair_surface<Measure, DefaultExactness>(
+        const bool repair = o_.optimize_surface && movable;
+        ro.max_rounds = repair ? o_.certify_rounds : 0;
+        CertificationOutcome c = certify_and_repair_surface<Measure, DefaultExactness>(
             fm.mesh, s, fm.uv, surface_ideals(fm.mesh, opt.ideal), opt.solver_options(), ro, o_.threads,
-            opt.regularization_alpha, measure_, start);
+            opt.regularization_alpha, measure_, repair ? &uv_start : nullptr);
+        if (!repair && !c.certified()) c.reason = RepairStop::not_repaired;
         merge_face_certificate(certification, c, fm.patch);
       }
       if (o_.optimize_surface && movable)

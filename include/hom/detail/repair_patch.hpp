@@ -3,15 +3,17 @@
 /// The bookkeeping of a certify-and-repair round (optimize/certified.hpp for
 /// volume and planar meshes, surface/certified_surface.hpp for surface
 /// meshes): the elements of each node, the sentinel points a round watches,
-/// whether a fold can be mended by the free nodes, and the ring of elements
-/// around the failing ones.
+/// whether a fold can be mended by the free nodes, the rings of elements
+/// around the failing ones and the round's local problem.
 
+#include <algorithm>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "hom/basis/lagrange.hpp"
 #include "hom/element/family.hpp"
+#include "hom/nodes/node_set.hpp"
 #include "hom/quality/certify.hpp"
 
 namespace hom::detail {
@@ -100,6 +102,72 @@ std::vector<int> element_rings(const Connectivity& conn, const NodeElements& by_
     frontier = std::move(next);
   }
   return level;
+}
+
+/// A repair round's local problem: the free nodes of the elements within
+/// `rings` element rings of the failing ones, and every element with such a
+/// node (the rest of the mesh is held), numbered locally.
+struct RepairPatch {
+  std::vector<int> elements;    ///< the problem's mesh elements, ascending
+  std::vector<int> nodes;       ///< the mesh node of each local node
+  std::vector<bool> free;       ///< whether each local node moves
+  std::vector<double> weight;   ///< pull-back weight of each local node: 1 - ring / (rings + 1)
+  Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic> connectivity;  ///< local, one column per element
+  int num_free = 0;
+};
+
+template <class Connectivity, class FreeMask>
+RepairPatch repair_patch(const Connectivity& conn, int num_nodes, const NodeElements& by_node,
+                         const std::vector<int>& failing, int rings, const FreeMask& mesh_free) {
+  const int ne = int(conn.cols()), npe = int(conn.rows());
+  const std::vector<int> level = element_rings(conn, by_node, failing, rings);
+  std::vector<char> free_node(num_nodes, 0), in_problem(ne, 0);
+  std::vector<int> node_level(num_nodes, rings + 1);
+  RepairPatch patch;
+  for (int e = 0; e < ne; ++e)
+    if (level[e] >= 0)
+      for (int i = 0; i < npe; ++i) {
+        const int node = conn(i, e);
+        node_level[node] = std::min(node_level[node], level[e]);
+        if (mesh_free[node] && !free_node[node]) {
+          free_node[node] = 1;
+          ++patch.num_free;
+          for (int k = by_node.offset[node]; k < by_node.offset[node + 1]; ++k) in_problem[by_node.element[k]] = 1;
+        }
+      }
+  std::vector<int> local(num_nodes, -1);
+  for (int e = 0; e < ne; ++e)
+    if (in_problem[e]) {
+      patch.elements.push_back(e);
+      for (int i = 0; i < npe; ++i)
+        if (local[conn(i, e)] < 0) {
+          local[conn(i, e)] = int(patch.nodes.size());
+          patch.nodes.push_back(conn(i, e));
+        }
+    }
+  for (int node : patch.nodes) {
+    patch.free.push_back(free_node[node] != 0);
+    patch.weight.push_back(1.0 - double(node_level[node]) / double(rings + 1));
+  }
+  patch.connectivity.resize(npe, Eigen::Index(patch.elements.size()));
+  for (std::size_t b = 0; b < patch.elements.size(); ++b)
+    for (int i = 0; i < npe; ++i) patch.connectivity(i, Eigen::Index(b)) = local[conn(i, patch.elements[b])];
+  return patch;
+}
+
+/// The elements not certified valid (`any`: whether there is one) and, of
+/// those, the ones whose fold depends on a free node (the returned list).
+template <ElementFamily Family, NodeSet Nodes, class Connectivity, class FreeMask>
+std::vector<int> repairable_elements(int p, const std::vector<ElementCertificate<Family>>& cert,
+                                     const Connectivity& conn, const FreeMask& free, bool& any) {
+  std::vector<int> failing;
+  any = false;
+  for (int e = 0; e < int(cert.size()); ++e)
+    if (cert[e].status != Certificate::certified_valid) {
+      any = true;
+      if (fold_depends_on_free_node<Family, Nodes>(p, cert[e], conn, e, free)) failing.push_back(e);
+    }
+  return failing;
 }
 
 }  // namespace hom::detail

@@ -81,7 +81,7 @@
 #include <string_view>
 #include <vector>
 
-#include "hom/basis/lagrange.hpp"
+#include "hom/detail/repair_patch.hpp"
 #include "hom/mesh/mesh.hpp"
 #include "hom/optimize/element_objective.hpp"
 #include "hom/optimize/mesh_problem.hpp"
@@ -101,7 +101,7 @@ enum class RepairStop {
   no_free_nodes,  ///< the uncertified elements have no free node within one element
   held,           ///< each uncertified element folds at a point where only held nodes determine det
   worse,          ///< the last round left more elements invalid or uncertified; it was undone
-  not_repaired,   ///< certified only: no repair stage ran (surface meshes)
+  not_repaired,   ///< certified only: no repair stage ran (CAD faces that are not optimized)
 };
 
 inline std::string_view to_string(RepairStop s) {
@@ -231,7 +231,6 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
                                         const Solver& solver, SolverOptions so, const CertifyRepairOptions& o, int threads,
                                         const Regularization& regularization, const Measure& measure = {},
                                         const typename Mesh<Family, Nodes, Family::dim>::Coordinates* valid_start = nullptr) {
-  using Point = typename Family::Point;
   using Problem = OptimizationProblem<Family, Measure>;
   const auto start = std::chrono::steady_clock::now();
   CertifyOptions co = o.certify;
@@ -246,45 +245,16 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
   }
 
   const int p = mesh.degree();
-  const int ne = mesh.num_elements(), nn = mesh.num_nodes(), npe = mesh.nodes_per_element();
+  const int nn = mesh.num_nodes(), npe = mesh.nodes_per_element();
   const auto& conn = mesh.elements();
   const QuadratureRule<Family::dim>& base_rule = quadrature_for<Family, Q>(p);
   const Tabulation<Family>& base_tab = tabulation<Family, Nodes>(p, base_rule);
   const double weight = o.sentinel_weight * std::accumulate(base_rule.weights.begin(), base_rule.weights.end(), 0.0) /
                         double(base_rule.size());
   const std::vector<bool> mesh_free = free_node_mask(mesh);
-
-  // Elements of each node (CSR), built on the first round.
-  std::vector<int> offsets, node_elements;
-  auto build_node_elements = [&] {
-    offsets.assign(nn + 1, 0);
-    for (int e = 0; e < ne; ++e)
-      for (int i = 0; i < npe; ++i) ++offsets[conn(i, e) + 1];
-    for (int k = 0; k < nn; ++k) offsets[k + 1] += offsets[k];
-    node_elements.resize(offsets[nn]);
-    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-    for (int e = 0; e < ne; ++e)
-      for (int i = 0; i < npe; ++i) node_elements[fill[conn(i, e)]++] = e;
-  };
-
-  std::vector<Point> sentinels;
-  for (int v = 0; v < Family::num_vertices; ++v) sentinels.push_back(Family::vertex(v));
-  auto add_sentinel = [&](const Point& x) {
-    for (const auto& s : sentinels)
-      if ((s - x).squaredNorm() <= 1e-24) return;
-    sentinels.push_back(x);
-  };
+  std::optional<detail::NodeElements> by_node;  // built on the first round
+  detail::SentinelPoints<Family> sentinels;
   std::size_t solved_with = 0;  // sentinels of the last round's problem
-  const auto& basis = lagrange_basis<Family, Nodes>(p);
-  // Whether det at the certified-invalid point of element e depends on a free node.
-  auto repairable = [&](int e) {
-    if (!cert[e].invalid_point) return true;
-    const Eigen::MatrixXd g = basis.gradient(*cert[e].invalid_point);  // n x Dim
-    const double scale = g.rowwise().norm().maxCoeff();
-    for (int i = 0; i < npe; ++i)
-      if (mesh_free[conn(i, e)] && g.row(i).norm() > 1e-12 * scale) return true;
-    return false;
-  };
   // The normal stage's result, kept from the first round on.
   std::optional<typename Mesh<Family, Nodes, Family::dim>::Coordinates> start_nodes;
   std::vector<ElementCertificate<Family>> start_cert;
@@ -293,13 +263,8 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
   so.target_quality = 0.0;  // the round's quality includes its sentinels; converge instead
   out.reason = RepairStop::certified;
   for (;;) {
-    std::vector<int> failing;
     bool any = false;
-    for (int e = 0; e < ne; ++e)
-      if (cert[e].status != Certificate::certified_valid) {
-        any = true;
-        if (repairable(e)) failing.push_back(e);
-      }
+    const std::vector<int> failing = detail::repairable_elements<Family, Nodes>(p, cert, conn, mesh_free, any);
     if (!any) {
       out.reason = RepairStop::certified;
       break;
@@ -316,10 +281,7 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
       start_nodes = mesh.nodes();
       start_cert = cert;
     }
-    for (int e : failing) {
-      if (cert[e].invalid_point) add_sentinel(*cert[e].invalid_point);
-      if (cert[e].weakest_point) add_sentinel(*cert[e].weakest_point);
-    }
+    for (int e : failing) sentinels.add(cert[e]);
     if (sentinels.size() == solved_with) {
       out.reason = RepairStop::no_progress;
       break;
@@ -328,7 +290,7 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
     // The round's patch: free nodes of the failing elements and of the
     // elements within `rings` node-neighbour rings of them (one ring, or
     // pull_back_rings for a pull-back); the elements of those nodes.
-    if (offsets.empty()) build_node_elements();
+    if (!by_node) by_node.emplace(conn, nn);
     // A pull-back needs the failing elements valid at the start.
     bool pull_back = valid_start != nullptr;
     if (pull_back) {
@@ -338,57 +300,17 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
       pull_back = detail::patch_certified<Family, Nodes>(p, *valid_start, Cf, o.certify, threads);
     }
     const int rings = pull_back ? std::max(1, o.pull_back_rings) : 1;
-    std::vector<int> level(ne, -1);  // element rings away from the failing elements
-    std::vector<int> frontier = failing;
-    for (int e : failing) level[e] = 0;
-    for (int r = 1; r <= rings; ++r) {
-      std::vector<int> next;
-      for (int e : frontier)
-        for (int i = 0; i < npe; ++i)
-          for (int k = offsets[conn(i, e)]; k < offsets[conn(i, e) + 1]; ++k)
-            if (level[node_elements[k]] < 0) {
-              level[node_elements[k]] = r;
-              next.push_back(node_elements[k]);
-            }
-      frontier = std::move(next);
-    }
-    std::vector<char> free_node(nn, 0), in_problem(ne, 0);
-    std::vector<int> node_level(nn, rings + 1);
-    int num_free = 0;
-    for (int e = 0; e < ne; ++e)
-      if (level[e] >= 0)
-        for (int i = 0; i < npe; ++i) {
-          const int node = conn(i, e);
-          node_level[node] = std::min(node_level[node], level[e]);
-          if (mesh_free[node] && !free_node[node]) {
-            free_node[node] = 1;
-            ++num_free;
-            for (int k = offsets[node]; k < offsets[node + 1]; ++k) in_problem[node_elements[k]] = 1;
-          }
-        }
-    if (num_free == 0) {
+    const detail::RepairPatch patch = detail::repair_patch(conn, nn, *by_node, failing, rings, mesh_free);
+    if (patch.num_free == 0) {
       out.reason = RepairStop::no_free_nodes;
       break;
     }
-    std::vector<int> elements, nodes, local(nn, -1);
-    for (int e = 0; e < ne; ++e)
-      if (in_problem[e]) {
-        elements.push_back(e);
-        for (int i = 0; i < npe; ++i)
-          if (local[conn(i, e)] < 0) {
-            local[conn(i, e)] = int(nodes.size());
-            nodes.push_back(conn(i, e));
-          }
-      }
+    const std::vector<int>& elements = patch.elements;
+    const std::vector<int>& nodes = patch.nodes;
+    const std::vector<bool>& free = patch.free;
+    const typename Problem::Connectivity& C = patch.connectivity;
     typename Problem::Coordinates X(Family::dim, Eigen::Index(nodes.size()));
-    std::vector<bool> free(nodes.size());
-    for (std::size_t k = 0; k < nodes.size(); ++k) {
-      X.col(Eigen::Index(k)) = mesh.node(nodes[k]);
-      free[k] = free_node[nodes[k]] != 0;
-    }
-    typename Problem::Connectivity C(npe, Eigen::Index(elements.size()));
-    for (std::size_t b = 0; b < elements.size(); ++b)
-      for (int i = 0; i < npe; ++i) C(i, Eigen::Index(b)) = local[conn(i, elements[b])];
+    for (std::size_t k = 0; k < nodes.size(); ++k) X.col(Eigen::Index(k)) = mesh.node(nodes[k]);
     // Step 3: pull the patch back towards the stage's start until it certifies valid.
     const auto certified_along = [&](const typename Problem::Coordinates& from, const typename Problem::Coordinates& to,
                                      double first) -> std::optional<typename Problem::Coordinates> {
@@ -407,10 +329,7 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
       // the start with nodes where the stage left them.
       typename Problem::Coordinates S = X;
       for (std::size_t k = 0; k < nodes.size(); ++k)
-        if (free[k]) {
-          const double w = 1.0 - double(node_level[nodes[k]]) / double(rings + 1);
-          S.col(Eigen::Index(k)) += w * (valid_start->col(nodes[k]) - X.col(Eigen::Index(k)));
-        }
+        if (free[k]) S.col(Eigen::Index(k)) += patch.weight[k] * (valid_start->col(nodes[k]) - X.col(Eigen::Index(k)));
       if (auto Y = certified_along(S, X, 0.5)) {
         start_of_round = std::move(*Y);
         certified_start = true;
@@ -418,7 +337,7 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
       }  // else the start is not valid here either: the round starts from X
     }
 
-    const Tabulation<Family> tab = sentinel_tabulation<Family, Nodes>(p, base_rule, sentinels, weight);
+    const Tabulation<Family> tab = sentinel_tabulation<Family, Nodes>(p, base_rule, sentinels.points(), weight);
     std::vector<IdealAtPoints<Family::dim>> ideals, base_ideals;
     for (int e : elements) {
       ideals.push_back(ideal_at_points<Family>(tab, ideal.vertices(e)));

@@ -163,7 +163,7 @@ CertificationOutcome certify_and_repair_surface(Mesh<Family, Nodes, 3>& mesh, co
   CertifyOptions co = o.certify;
   co.threads = threads;
   const int p = mesh.degree();
-  const int ne = mesh.num_elements(), nn = mesh.num_nodes(), npe = mesh.nodes_per_element();
+  const int nn = mesh.num_nodes();
   const auto& conn = mesh.elements();
   std::vector<ElementCertificate<Family>> cert = certify_surface_elements(mesh, surface, uv, co);
   CertificationOutcome out = certification_outcome(cert, RepairStop::certified);
@@ -192,13 +192,8 @@ CertificationOutcome certify_and_repair_surface(Mesh<Family, Nodes, 3>& mesh, co
   so.stage = "surface certify";
   so.target_quality = 0.0;  // the round's quality includes its sentinels; converge instead
   for (;;) {
-    std::vector<int> failing;
     bool any = false;
-    for (int e = 0; e < ne; ++e)
-      if (cert[e].status != Certificate::certified_valid) {
-        any = true;
-        if (detail::fold_depends_on_free_node<Family, Nodes>(p, cert[e], conn, e, mesh_free)) failing.push_back(e);
-      }
+    const std::vector<int> failing = detail::repairable_elements<Family, Nodes>(p, cert, conn, mesh_free, any);
     if (!any) {
       out.reason = RepairStop::certified;
       break;
@@ -230,47 +225,18 @@ CertificationOutcome certify_and_repair_surface(Mesh<Family, Nodes, 3>& mesh, co
     };
     const bool pull_back = valid_start != nullptr && certified(failing, *valid_start);
     const int rings = pull_back ? std::max(1, o.pull_back_rings) : 1;
-    const std::vector<int> level = detail::element_rings(conn, by_node, failing, rings);
-    std::vector<char> free_node(nn, 0), in_problem(ne, 0);
-    std::vector<int> node_level(nn, rings + 1);
-    int num_free = 0;
-    for (int e = 0; e < ne; ++e)
-      if (level[e] >= 0)
-        for (int i = 0; i < npe; ++i) {
-          const int node = conn(i, e);
-          node_level[node] = std::min(node_level[node], level[e]);
-          if (mesh_free[node] && !free_node[node]) {
-            free_node[node] = 1;
-            ++num_free;
-            for (int k = by_node.offset[node]; k < by_node.offset[node + 1]; ++k) in_problem[by_node.element[k]] = 1;
-          }
-        }
-    if (num_free == 0) {
+    const detail::RepairPatch patch = detail::repair_patch(conn, nn, by_node, failing, rings, mesh_free);
+    if (patch.num_free == 0) {
       out.reason = RepairStop::no_free_nodes;
       break;
     }
-    std::vector<int> elements, nodes, local(nn, -1);
-    for (int e = 0; e < ne; ++e)
-      if (in_problem[e]) {
-        elements.push_back(e);
-        for (int i = 0; i < npe; ++i)
-          if (local[conn(i, e)] < 0) {
-            local[conn(i, e)] = int(nodes.size());
-            nodes.push_back(conn(i, e));
-          }
-      }
+    const std::vector<int>& elements = patch.elements;
+    const std::vector<int>& nodes = patch.nodes;
+    const std::vector<bool>& free = patch.free;
     Eigen::Matrix2Xd U(2, Eigen::Index(nodes.size()));
-    std::vector<bool> free(nodes.size());
-    for (std::size_t k = 0; k < nodes.size(); ++k) {
-      U.col(Eigen::Index(k)) = uv.col(nodes[k]);
-      free[k] = free_node[nodes[k]] != 0;
-    }
-    typename Problem::Connectivity C(npe, Eigen::Index(elements.size()));
+    for (std::size_t k = 0; k < nodes.size(); ++k) U.col(Eigen::Index(k)) = uv.col(nodes[k]);
     std::vector<SurfaceIdealVertices<Family>> patch_ideals;
-    for (std::size_t b = 0; b < elements.size(); ++b) {
-      for (int i = 0; i < npe; ++i) C(i, Eigen::Index(b)) = local[conn(i, elements[b])];
-      patch_ideals.push_back(ideals[elements[b]]);
-    }
+    for (int e : elements) patch_ideals.push_back(ideals[e]);
     // The patch's parameters as a mesh-wide matrix, for `certified`.
     auto on_mesh = [&](const Eigen::Matrix2Xd& V) {
       Eigen::Matrix2Xd W = uv;
@@ -290,10 +256,7 @@ CertificationOutcome certify_and_repair_surface(Mesh<Family, Nodes, 3>& mesh, co
     if (pull_back) {
       Eigen::Matrix2Xd S = U;
       for (std::size_t k = 0; k < nodes.size(); ++k)
-        if (free[k]) {
-          const double w = 1.0 - double(node_level[nodes[k]]) / double(rings + 1);
-          S.col(Eigen::Index(k)) += w * (valid_start->col(nodes[k]) - U.col(Eigen::Index(k)));
-        }
+        if (free[k]) S.col(Eigen::Index(k)) += patch.weight[k] * (valid_start->col(nodes[k]) - U.col(Eigen::Index(k)));
       if (auto V = certified_along(S, U, 0.5)) {
         start_of_round = std::move(*V);
         certified_start = true;
@@ -302,10 +265,10 @@ CertificationOutcome certify_and_repair_surface(Mesh<Family, Nodes, 3>& mesh, co
     }
 
     const Tabulation<Family> tab = sentinel_tabulation<Family, Nodes>(p, base_rule, sentinels.points(), weight);
-    Problem problem(tab, surface, start_of_round, C, free, patch_ideals, measure);
+    Problem problem(tab, surface, start_of_round, patch.connectivity, free, patch_ideals, measure);
     problem.set_threads(threads);
     problem.set_regularization_alpha(alpha);
-    const Problem at_quadrature(base_tab, surface, U, C, free, patch_ideals, measure);
+    const Problem at_quadrature(base_tab, surface, U, patch.connectivity, free, patch_ideals, measure);
     out.repairs.push_back(NewtonSolver{}.solve(problem, so));
     if (certified_start) problem.coordinates() = *certified_along(start_of_round, problem.coordinates(), 1.0);
     ++out.rounds;
