@@ -85,9 +85,9 @@
 
 namespace fs = std::filesystem;
 namespace po = boost::program_options;
-using hom::bench::compare_with_gmsh;
-using hom::bench::peer_json;
-using hom::bench::PeerComparison;
+using hom::meshing::compare_with_gmsh;
+using hom::meshing::peer_json;
+using hom::meshing::PeerComparison;
 using hom::bench::seconds_since;
 using Tet = hom::Simplex<3>;
 using TetMesh = hom::Mesh<Tet>;

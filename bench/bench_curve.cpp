@@ -46,10 +46,12 @@
 /// curve (det = 0 there whatever the free nodes do); the quad mesher now
 /// splits such "ears" (src/cad/quad_ears.hpp), and plate_quad's 708
 /// quadrilaterals are certified valid at p = 3 and 4. With --certify, each
-/// tetrahedral result also goes through Gmsh's own validity analysis
-/// (gmsh_validity.hpp; --no-peer skips it), and the claim that Gmsh and hom
-/// agree on every element hom decides is checked (issue 8's cross-check on
-/// the CAD cases).
+/// volume and planar result (tetrahedra, planar triangles and
+/// quadrilaterals) also goes through Gmsh's own validity analysis
+/// (src/meshing/gmsh_validity.hpp; --no-peer skips it), and the claim that
+/// Gmsh and hom agree on every element hom decides is checked (issue 8's
+/// cross-check on the CAD cases). Surface meshes have no such peer: Gmsh
+/// signs a curved surface element against its straight facet's normal.
 ///
 /// Exit status: 0 when every case gives a valid mesh, 1 when a case is
 /// invalid or fails (the error is printed and recorded), 2 on bad options.
@@ -113,7 +115,7 @@ struct Settings {
   bool quick = false;
   int iterations_after_valid = 5;
   bool certify = false;  ///< CurveOptions::certify: certify-and-repair after the last stage
-  bool gmsh_peer = true;  ///< with certify: Gmsh's validity analysis of each tetrahedral result beside hom's
+  bool gmsh_peer = true;  ///< with certify: Gmsh's validity analysis of each volume or planar result beside hom's
 };
 
 const char* kind_name(Kind k) {
@@ -201,7 +203,7 @@ class Runner {
                       "(stop: %s), %.2f s\n",
                       c->valid, c->invalid, c->undecided, c->initial_valid, c->initial_invalid, c->initial_undecided,
                       c->rounds, std::string(to_string(c->reason)).c_str(), c->time_s);
-        if constexpr (F::dim == 3)
+        if constexpr (S == F::dim)
           if (r.certification && s_.gmsh_peer) compare_with_gmsh(c.name, p, r.mesh);
         const std::string claim = c.name + " p = " + std::to_string(p) +
                                   ": valid (0 inverted at quadrature points, det > 0 at the nodes, boundary on the CAD)";
@@ -229,10 +231,11 @@ class Runner {
   /// Issue 8's cross-check on the CAD cases: Gmsh's Plugin(AnalyseMeshQuality)
   /// and hom's certificate (Bernstein bounds) on the final tetrahedral mesh,
   /// element by element; the result goes to the last case's "peer".
-  void compare_with_gmsh(const std::string& name, int p, const hom::Mesh<hom::Simplex<3>>& mesh) {
+  template <hom::ElementFamily F>
+  void compare_with_gmsh(const std::string& name, int p, const hom::Mesh<F, hom::WarpBlend, F::dim>& mesh) {
     const hom::meshing::GmshSession session;
     const auto certificate = hom::certify_mesh(mesh);
-    const auto peer = hom::bench::compare_with_gmsh(mesh, certificate, "hom_curve_" + name + "_p" + std::to_string(p));
+    const auto peer = hom::meshing::compare_with_gmsh(mesh, certificate, "hom_curve_" + name + "_p" + std::to_string(p));
     std::printf("   gmsh %s Plugin(AnalyseMeshQuality): %d invalid (hom certified invalid %d, undecided %d), "
                 "disagreements %d, %.2f s\n",
                 peer.gmsh.version.c_str(), peer.invalid, certificate.invalid, certificate.undecided,
@@ -240,7 +243,7 @@ class Runner {
     checks_.expect(peer.disagreements() == 0, name + " p = " + std::to_string(p) +
                                                   ": Gmsh's Plugin(AnalyseMeshQuality) and hom agree on every "
                                                   "element hom decides");
-    cases_.back().set("peer", hom::bench::peer_json(peer));
+    cases_.back().set("peer", hom::meshing::peer_json(peer));
   }
 
   void report(const Case& c, const hom::cad::CadModel& cad, const std::string& family, int p,
@@ -408,7 +411,7 @@ int main(int argc, char** argv) {
        "volume / planar stage: stop once valid this many iterations (-1: optimize to convergence)")  //
       ("certify", po::bool_switch(&s.certify),
        "certify det > 0 everywhere in each element (Bernstein bounds) and repair folds between the quadrature "
-       "points, as hom curve --certify; tetrahedral results are also analysed by Gmsh (see --no-peer)")  //
+       "points, as hom curve --certify; volume and planar results are also analysed by Gmsh (see --no-peer)")  //
       ("no-peer", po::bool_switch(&no_peer), "with --certify: skip Gmsh's validity analysis of the results");
   std::vector<int> forced;
   try {
