@@ -43,7 +43,7 @@ final=$(json_field "$work/opt.json" optimized min_q) || fail "json: no optimized
   || fail "json: boundary nodes off the CAD"
 "$py" "$helper" check "$work/opt.msh" 1e-9 1e-2 || fail "optimized nodes are not on the sphere"
 
-# 2. --certify: each element, projected along its mean surface normal, certified valid
+# 2. --certify: each element, against its nodes' interpolated surface normals, certified valid
 # (Bernstein bounds); the report carries the certificate, and for a surface
 # mesh no scaled-Jacobian bound (that would be the projection's).
 log=$("$hom" optimize "$work/perturbed.msh" --cad "$work/sphere.brep" -o "$work/cert.msh" --json "$work/cert.json" \

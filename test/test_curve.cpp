@@ -277,7 +277,7 @@ TEST_CASE("certify: the planar pipeline's certificate is the result's, and decid
   const auto r = cad::curve_mesh<Simplex<2>, 2>(m, linear, o);
   REQUIRE(r.certification);
   const auto& c = *r.certification;
-  CHECK_FALSE(c.projected);
+  CHECK_FALSE(c.on_surface);
   CHECK(c.valid + c.invalid + c.undecided == r.mesh.num_elements());
   // An independent certification of the mesh the pipeline returns.
   CertifyOptions co;
@@ -312,7 +312,7 @@ TEST_CASE("certify: a surface element folded in its face's (u, v) is certified i
   o.optimize_surface = false;  // certify what is given: no surface optimization, so no repair either
   const auto good = cad::optimize_on_cad<Simplex<2>, 3>(m, curved.mesh, o);
   REQUIRE(good.certification);
-  CHECK(good.certification->projected);
+  CHECK(good.certification->on_surface);
   CHECK(good.certification->reason == RepairStop::certified);
   CHECK(good.certification->valid == good.mesh.num_elements());
   CHECK(good.valid);

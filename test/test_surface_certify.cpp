@@ -1,7 +1,7 @@
 // Certification and repair of surface meshes (include/hom/surface/
 // certified_surface.hpp, issues 6 and 8):
 //   - on the plane z = 0 a surface element's certificate is the planar
-//     element's (the projection along the surface normal is the plane itself);
+//     element's (g = (x_xi x x_eta) . e_z is the planar det);
 //   - a degree-3 patch on a sphere whose boundary edge is bent into an
 //     element folds it at a corner; optimized on the sphere it is valid at
 //     every quadrature point but certified invalid, and the repair rounds
@@ -53,16 +53,17 @@ Eigen::Matrix3Xd on_surface(const G& g, const UVs& uv) {
   return X;
 }
 
-/// det [x_xi, x_eta, N] of element e at reference point xi through the
-/// Lagrange basis, N the mean of the unit surface normals at its nodes.
+/// (x_xi x x_eta) . n(xi) of element e at reference point xi through the
+/// Lagrange basis, n the interpolated unit surface normals of its nodes
+/// (the sign the optimizer tests and the certificate bounds).
 template <class G>
 double normal_det(const SurfaceMesh& mesh, const G& g, const UVs& uv, int e, const F::Point& xi) {
   const Eigen::Matrix3Xd X = mesh.element_coordinates(e);
-  const Eigen::MatrixXd grad = lagrange_basis<F, N>(mesh.degree()).gradient(xi);  // n x 2
-  const Eigen::Matrix<double, 3, 2> J = X * grad;
+  const auto& basis = lagrange_basis<F, N>(mesh.degree());
+  const Eigen::Matrix<double, 3, 2> J = X * basis.gradient(xi);
   Eigen::Matrix2Xd UV(2, mesh.nodes_per_element());
   for (int i = 0; i < mesh.nodes_per_element(); ++i) UV.col(i) = uv.col(mesh.elements()(i, e));
-  return J.col(0).cross(J.col(1)).dot(mean_surface_normal(g, UV).normalized());
+  return J.col(0).cross(J.col(1)).dot(element_unit_normals(g, UV) * basis.value(xi));
 }
 
 /// The degree-p patch of the sphere over [lo, hi]^2 in (u, v), with the
@@ -107,10 +108,13 @@ TEST_CASE("surface certify: on the plane z = 0 an element's certificate is the p
     const auto patch = folded_patch(plane, p, 0.6, height);
     for (int e = 0; e < patch.mesh.num_elements(); ++e) {
       Eigen::Matrix2Xd X2 = patch.mesh.element_coordinates(e).topRows<2>();
-      const auto a = certify_surface_element<F, N>(p, patch.mesh.element_coordinates(e), Eigen::Vector3d::UnitZ(), CertifyOptions{});
+      const Eigen::Matrix3Xd up = Eigen::Vector3d::UnitZ().replicate(1, patch.mesh.nodes_per_element());
+      const auto a = certify_surface_element<F, N>(p, patch.mesh.element_coordinates(e), up, CertifyOptions{});
       const auto b = certify_element<F>(jacobian_bernstein<F, N>(p), X2, CertifyOptions{});
       CHECK(a.status == b.status);
-      CHECK(a.min_det_bound == doctest::Approx(b.min_det_bound).epsilon(1e-12));
+      // The same polynomial in a space of higher degree (3p - 2 against 2p - 2):
+      // its coefficients bound det at least as tightly.
+      if (a.depth == 0 && b.depth == 0) CHECK(a.min_det_bound >= b.min_det_bound - 1e-12 * std::abs(b.min_det_bound));
       invalid += a.status == Certificate::certified_invalid;
     }
   }
@@ -150,7 +154,7 @@ TEST_CASE("surface certify: a corner fold on a sphere that the surface optimizer
       const auto free = surface_free_node_mask(patch.mesh);
       const auto c = certify_and_repair_surface(patch.mesh, sphere, patch.uv, ideals, oo.solver_options(),
                                                 repair_options(4), 1);
-      CHECK(c.projected);
+      CHECK(c.on_surface);
       CHECK(c.initial_invalid == int(failing.size()));
       CHECK(c.valid + c.invalid + c.undecided == patch.mesh.num_elements());
       CHECK(int(c.repairs.size()) == c.rounds);
@@ -212,7 +216,10 @@ TEST_CASE("surface certify: a corner fold on a sphere that the surface optimizer
       }
     }
   CHECK(folds >= 3);  // the construction produced the case under test
-  CHECK(repaired >= 2);
+  // 5 of 8 with the interpolated nodal normals (measured; 6 with 12 rounds).
+  // With one mean normal per element the certificate could disagree in sign
+  // with the optimizer at a nearly degenerate corner, and only 2 were repaired.
+  CHECK(repaired >= 4);
   MESSAGE(repaired << " of " << folds << " surface folds repaired");
 }
 

@@ -60,7 +60,10 @@
 #include "hom/optimize/linear_formulation.hpp"
 #include "hom/optimize/optimize.hpp"
 // Meshes on parameterized surfaces (chapter 5).
+#include "hom/surface/certified_surface.hpp"
+#include "hom/surface/normal_jacobian_bernstein.hpp"
 #include "hom/surface/optimize_boundary_face.hpp"
 #include "hom/surface/optimize_surface.hpp"
 #include "hom/surface/surface_continuation.hpp"
 #include "hom/surface/surface_mesh_quality.hpp"
+#include "hom/surface/unit_normal.hpp"

@@ -809,6 +809,7 @@ class Pipeline {
             fm.mesh, s, fm.uv, surface_ideals(fm.mesh, opt.ideal), opt.solver_options(), ro, o_.threads,
             opt.regularization_alpha, measure_, repair ? &uv_start : nullptr);
         if (!repair && !c.certified()) c.reason = RepairStop::not_repaired;
+        if (!c.certified()) say_face_not_certified(fm, c);
         merge_face_certificate(certification, c, fm.patch);
       }
       if (o_.optimize_surface && movable)
@@ -836,7 +837,7 @@ class Pipeline {
                                      const std::vector<int>& patch) {
     if (!all) {
       all.emplace();
-      all->projected = true;
+      all->on_surface = true;
     }
     CertificationOutcome& a = *all;
     a.initial_valid += face.initial_valid;
@@ -854,6 +855,19 @@ class Pipeline {
     std::sort(a.uncertified.begin(), a.uncertified.end());
     a.repairs.insert(a.repairs.end(), face.repairs.begin(), face.repairs.end());
     a.time_s += face.time_s;
+  }
+
+  /// One line per CAD face left uncertified: which face, which elements
+  /// (the mesh's), and why its repair stopped.
+  void say_face_not_certified(const FacePatchMesh& fm, const CertificationOutcome& c) const {
+    std::string elements;
+    for (std::size_t k = 0; k < c.uncertified.size() && k < 5; ++k)
+      elements += (k ? " " : "") + std::to_string(patches_[fm.patch[c.uncertified[k]]].element);
+    if (c.uncertified.size() > 5) elements += " ...";
+    say("  CAD face " + std::to_string(fm.face) + ": " + std::to_string(c.invalid) + " invalid, " +
+        std::to_string(c.undecided) + " undecided of " + std::to_string(fm.mesh.num_elements()) + " (" +
+        (surface ? "elements " : "boundary faces of elements ") + elements + "); repair stopped: " +
+        std::string(to_string(c.reason)) + (c.restored ? ", face kept as optimized" : ""));
   }
 
   void say_certificate(const std::string& what, const CertificationOutcome& c) const {

@@ -99,9 +99,10 @@ struct CurveOptions {
   /// Certification as the final acceptance test (issue 8). A volume or
   /// planar mesh: hom::optimize's certify stage (optimize/certified.hpp)
   /// after the domain stage, its repair rounds moving interior nodes only (the
-  /// boundary stays on the CAD). A surface mesh: each element, projected on
-  /// the plane of its straight-sided facet, is certified, without repair
-  /// (Pipeline::certify_faces). An uncertified result is not valid
+  /// boundary stays on the CAD). A surface mesh: each element is certified
+  /// against its nodes' interpolated surface normals and repaired by sliding
+  /// face nodes on the CAD (surface/certified_surface.hpp). An uncertified
+  /// result is not valid
   /// (CurveResult::valid).
   bool certify = false;
   int certify_depth = CertifyOptions{}.max_depth;      ///< subdivision levels before "undecided"

@@ -15,7 +15,7 @@ namespace hom::tools {
 
 inline void print_certification(const CertificationOutcome& c, int max_depth) {
   std::printf("certified (Bernstein bounds of det D phi_P, subdivision depth <= %d%s):\n", max_depth,
-              c.projected ? ", each surface element projected along its nodes' mean surface normal" : "");
+              c.on_surface ? ", each surface element against its nodes' interpolated surface normals" : "");
   std::printf("  after optimization: %d certified valid, %d certified invalid, %d undecided\n", c.initial_valid,
               c.initial_invalid, c.initial_undecided);
   if (c.rounds > 0) {
@@ -26,7 +26,7 @@ inline void print_certification(const CertificationOutcome& c, int max_depth) {
                 c.time_s, c.restored ? "; no fewer uncertified elements, so the optimized mesh is kept" : "");
   }
   std::printf("  final: %d certified valid, %d certified invalid, %d undecided", c.valid, c.invalid, c.undecided);
-  if (!c.projected) std::printf("; certified min scaled Jacobian >= %.4f", c.min_scaled_jacobian);
+  if (!c.on_surface) std::printf("; certified min scaled Jacobian >= %.4f", c.min_scaled_jacobian);
   std::printf("\n");
   if (!c.certified()) {
     std::printf("  NOT CERTIFIED: elements");
@@ -36,10 +36,11 @@ inline void print_certification(const CertificationOutcome& c, int max_depth) {
 }
 
 /// Adds the certificate's keys to a report case. A surface mesh's bound is of
-/// its projected elements, so it has no certified_min_scaled_jacobian.
+/// g = (x_xi x x_eta) . n, not of its scaled Jacobian, so it has no
+/// certified_min_scaled_jacobian.
 inline void add_certification(io::Json& c, const CertificationOutcome& o, int max_depth) {
   c.set("certified_valid", o.valid).set("certified_invalid", o.invalid).set("undecided", o.undecided);
-  if (!o.projected && std::isfinite(o.min_scaled_jacobian))
+  if (!o.on_surface && std::isfinite(o.min_scaled_jacobian))
     c.set("certified_min_scaled_jacobian", o.min_scaled_jacobian);
   c.set("certify_max_depth", max_depth)
       .set("certify_rounds", o.rounds)

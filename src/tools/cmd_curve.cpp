@@ -31,8 +31,8 @@
 // each element (Bernstein coefficients), folds between quadrature points
 // repaired by moving interior nodes (optimize/certified.hpp). The CAD faces
 // (every face of a surface mesh, the boundary faces of a volume mesh) are
-// certified element by element, each projected along its nodes' mean
-// surface normal, and their folds repaired by sliding face nodes on the
+// certified element by element, against their nodes' interpolated surface
+// normals, and their folds repaired by sliding face nodes on the
 // surface (surface/certified_surface.hpp). An uncertified result is invalid.
 //
 // --bl-first adds a curved boundary layer of stretched tetrahedra on the wall

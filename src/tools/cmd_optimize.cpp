@@ -31,7 +31,7 @@
 // certificate of the result is printed and added to the JSON with hom quality
 // --certify's keys. With --cad the same stage runs on the volume or planar
 // mesh after the CAD pipeline; a surface mesh is certified element by
-// element, each projected along its nodes' mean surface normal, and its
+// element, against its nodes' interpolated surface normals, and its
 // folds are repaired by sliding face nodes on the CAD surface
 // (surface/certified_surface.hpp); an uncertified result is not written.
 //

@@ -139,11 +139,12 @@ struct CertificationOutcome {
   std::vector<int> uncertified;       ///< elements not certified valid at the end, ascending
   std::vector<SolverResult> repairs;  ///< each round's local solve
   double time_s = 0.0;                ///< certification and repair
-  /// A surface mesh, each element's polynomial map in R^3 projected on the
-  /// plane of its straight-sided facet and certified there (cad::CurveOptions::
-  /// certify). min_scaled_jacobian then bounds the projected element's, not
-  /// the surface element's, and is not reported.
-  bool projected = false;
+  /// A surface mesh: each element's polynomial map in R^3 certified against
+  /// its nodes' interpolated surface normals, g = (x_xi x x_eta) . n
+  /// (surface/certified_surface.hpp). min_scaled_jacobian then bounds
+  /// min g / max g, not the surface element's scaled Jacobian, and is not
+  /// reported.
+  bool on_surface = false;
 
   bool certified() const { return invalid == 0 && undecided == 0; }
 };

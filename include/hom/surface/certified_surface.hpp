@@ -5,17 +5,23 @@
 /// optimize/certified.hpp.
 ///
 /// The certificate is of the element a solver reads: the degree-p polynomial
-/// x(xi) through the nodes in R^3, projected on the plane normal to N, the
-/// mean of the unit surface normals S_u x S_v at the element's nodes (one
-/// vector per element, oriented as the surface). det [x_xi, x_eta, N] is then
-/// a polynomial, certified as a planar element's (quality/certify.hpp).
-/// Certified valid means the element's tangent plane never turns over
-/// against the surface's normal: no fold, and no element inverted as a whole.
-/// (The facet's own normal would not do: a strongly curved element can be
-/// valid while its vertices, joined straight, turn the other way. The map
-/// S o u of chapter 5 is not certified either: at a pole, where S_u = 0, one
-/// (u, v) per node folds it near the pole for any polynomial u, although
-/// x(xi) is fine there.)
+/// x(xi) through the nodes in R^3, oriented by the interpolated unit surface
+/// normals of its nodes, g(xi) = (x_xi x x_eta) . sum_i N_i(xi) nu_i
+/// (normal_jacobian_bernstein.hpp), certified as a planar element's det
+/// (quality/certify.hpp). g has the sign the optimizer tests at its
+/// quadrature points (surface_problem.hpp), so the certificate extends the
+/// optimizer's validity to every point of the element, and a point where it
+/// fails is one the optimizer can be shown. Certified valid means the
+/// element's tangent plane never turns over against the surface's normal: no
+/// fold, and no element inverted as a whole. (The facet's own normal would
+/// not do: a strongly curved element can be valid while its vertices, joined
+/// straight, turn the other way. One normal per element would not do either:
+/// at a nearly degenerate corner it can disagree in sign with the
+/// optimizer's interpolated normal, and a repair round then has no point to
+/// work on. The map S o u of chapter 5 is not certified: at a pole, where
+/// S_u = 0, one (u, v) per node folds it near the pole for any polynomial u,
+/// although x(xi) is fine there; a node at a pole takes the normal's limit
+/// from inside its element, unit_normal.hpp.)
 ///
 /// The optimizer (eq 5.22) sees the surface Jacobian (eq 5.5) only at the
 /// quadrature points, so an optimized surface element can fold at a corner
@@ -53,7 +59,6 @@
 
 #include <Eigen/Core>
 
-#include "hom/detail/orthonormal_frame.hpp"
 #include "hom/detail/parallel.hpp"
 #include "hom/detail/repair_patch.hpp"
 #include "hom/geometry/surface_geometry.hpp"
@@ -63,52 +68,24 @@
 #include "hom/quadrature/quadrature_policy.hpp"
 #include "hom/quality/certify.hpp"
 #include "hom/quality/tabulation.hpp"
+#include "hom/surface/normal_jacobian_bernstein.hpp"
 #include "hom/surface/optimize_surface.hpp"
 #include "hom/surface/surface_problem.hpp"
+#include "hom/surface/unit_normal.hpp"
 
 namespace hom {
 
-/// N of the file comment for an element whose nodes lie at parameters UV
-/// (2 x n): the mean of the unit S_u x S_v at the nodes, leaving out nodes at
-/// a degenerate point of the parameterization (a pole, where S_u x S_v = 0).
-/// Zero if every node is degenerate.
-template <SurfaceGeometry Surface>
-Eigen::Vector3d mean_surface_normal(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (Eigen::Index i = 0; i < UV.cols(); ++i) {
-    const Eigen::Matrix<double, 3, 2> d = surface.derivatives(UV.col(i));
-    const Eigen::Vector3d c = d.col(0).cross(d.col(1));
-    const double l = c.norm();
-    if (l > 0.0) sum += c / l;
-  }
-  return sum;
-}
-
 /// The certificate of one surface element with nodes X (3 x n, the element's
-/// local layout) against the direction `normal` (N of the file comment).
+/// local layout) and unit nodal surface normals nu (3 x n): of g in the file
+/// comment.
 template <ElementFamily Family, NodeSet Nodes>
-ElementCertificate<Family> certify_surface_element(int p, const Eigen::Matrix<double, 3, Eigen::Dynamic>& X,
-                                                   const Eigen::Vector3d& normal, const CertifyOptions& o) {
-  static_assert(Family::dim == 2, "hom::certify_surface_element: surface elements are triangles and quadrilaterals");
-  const detail::OrthonormalFrame frame(normal, X.col(1) - X.col(0));  // e1 x e2 = N: det_2 = (x_xi x x_eta) . N
-  Eigen::Matrix<double, 2, 3> project;
-  project.row(0) = frame.e1.transpose();
-  project.row(1) = frame.e2.transpose();
-  const Eigen::Matrix<double, 2, Eigen::Dynamic> projected = project * X;
-  return certify_element<Family>(jacobian_bernstein<Family, Nodes>(p), projected, o);
+ElementCertificate<Family> certify_surface_element(int p, const Eigen::Ref<const Eigen::Matrix3Xd>& X,
+                                                   const Eigen::Ref<const Eigen::Matrix3Xd>& nu, const CertifyOptions& o) {
+  const BernsteinPolynomial<Family> g = normal_jacobian_bernstein<Family, Nodes>(p, X, nu);
+  return certify_coefficients<Family>(*g.space, g.coefficients, o);
 }
 
 namespace detail {
-
-/// N for an element with nodes X at parameters UV: mean_surface_normal, or
-/// the facet's normal where every node is degenerate.
-template <ElementFamily Family, SurfaceGeometry Surface>
-Eigen::Vector3d certificate_normal(const Surface& surface, const Eigen::Matrix2Xd& UV, const Eigen::Matrix3Xd& X) {
-  const Eigen::Vector3d normal = mean_surface_normal(surface, UV);
-  if (normal.norm() > 0.0) return normal;
-  const Eigen::Vector3d x0 = X.col(0), x1 = X.col(1), x2 = X.col(2);
-  return Family::is_simplex ? (x1 - x0).cross(x2 - x0) : (x2 - x0).cross(X.col(3) - x1);
-}
 
 /// Certificate of the element with connectivity column `nodes`, its nodes at
 /// parameters U of `surface`.
@@ -122,7 +99,7 @@ ElementCertificate<Family> certify_on_surface(int p, const Surface& surface, con
     UV.col(i) = U.col(nodes(i));
     X.col(i) = surface.evaluate(UV.col(i));
   }
-  return certify_surface_element<Family, Nodes>(p, X, certificate_normal<Family>(surface, UV, X), o);
+  return certify_surface_element<Family, Nodes>(p, X, element_unit_normals(surface, UV), o);
 }
 
 }  // namespace detail
@@ -307,7 +284,7 @@ CertificationOutcome certify_and_repair_surface(Mesh<Family, Nodes, 3>& mesh, co
   out.undecided = final_state.undecided;
   out.min_scaled_jacobian = final_state.min_scaled_jacobian;
   out.uncertified = final_state.uncertified;
-  out.projected = true;
+  out.on_surface = true;
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -52,6 +52,7 @@
 #include "hom/quality/tabulation.hpp"
 #include "hom/surface/surface_distortion.hpp"
 #include "hom/surface/surface_jacobian.hpp"
+#include "hom/surface/unit_normal.hpp"
 
 namespace hom {
 
@@ -105,25 +106,19 @@ SurfaceNormals facet_normals(const Eigen::Ref<const Eigen::Matrix<double, 3, Eig
 }
 
 /// With geometry: S_u x S_v (normalized) at u(xi) = sum_i u_i N_i(xi) for each
-/// quadrature point, and at u_i for node i. UV (2 x n) are the nodes'
+/// quadrature point, and at u_i for node i (unit_normal.hpp: zero at a
+/// degenerate point, or at a node its limit from inside). UV (2 x n) are the nodes'
 /// parameters, unwrapped across periodic seams (ParameterRange::unwrap) so
 /// that interpolating them stays inside the element.
 template <ElementFamily Family, SurfaceGeometry G>
 SurfaceNormals surface_normals(const Tabulation<Family>& tab, const G& g,
                                const Eigen::Ref<const Eigen::Matrix<double, 2, Eigen::Dynamic>>& UV) {
-  auto normal = [&](const Eigen::Vector2d& uv) {
-    const Eigen::Matrix<double, 3, 2> d = g.derivatives(uv);
-    const Eigen::Vector3d n = d.col(0).cross(d.col(1));
-    const double l = n.norm();
-    return l > 0.0 ? Eigen::Vector3d(n / l) : Eigen::Vector3d::Zero();
-  };
   SurfaceNormals r;
-  const int nq = tab.num_points(), n = tab.num_nodes();
+  const int nq = tab.num_points();
   r.points.resize(3, nq);
   const Eigen::Matrix<double, 2, Eigen::Dynamic> uq = UV * tab.shape_values.transpose();
-  for (int q = 0; q < nq; ++q) r.points.col(q) = normal(uq.col(q));
-  r.nodes.resize(3, n);
-  for (int i = 0; i < n; ++i) r.nodes.col(i) = normal(UV.col(i));
+  for (int q = 0; q < nq; ++q) r.points.col(q) = unit_normal(g, Eigen::Vector2d(uq.col(q)));
+  r.nodes = element_unit_normals(g, UV);
   return r;
 }
 

@@ -99,6 +99,7 @@
 #include "hom/quality/tabulation.hpp"
 #include "hom/surface/surface_distortion.hpp"
 #include "hom/surface/surface_element_quality.hpp"
+#include "hom/surface/unit_normal.hpp"
 
 namespace hom {
 
@@ -170,13 +171,7 @@ template <ElementFamily Family, SurfaceGeometry G>
 SurfaceNormals interpolated_nodal_normals(const Tabulation<Family>& tab, const G& g,
                                           const Eigen::Ref<const Eigen::Matrix<double, 2, Eigen::Dynamic>>& UV) {
   SurfaceNormals r;
-  r.nodes.resize(3, UV.cols());
-  for (Eigen::Index i = 0; i < UV.cols(); ++i) {
-    const Eigen::Matrix<double, 3, 2> d = g.derivatives(UV.col(i));
-    const Eigen::Vector3d c = d.col(0).cross(d.col(1));
-    const double l = c.norm();
-    r.nodes.col(i) = l > 0.0 ? Eigen::Vector3d(c / l) : Eigen::Vector3d::Zero();
-  }
+  r.nodes = element_unit_normals(g, UV);
   r.points = r.nodes * tab.shape_values.transpose();
   for (Eigen::Index q = 0; q < r.points.cols(); ++q) {
     const double l = r.points.col(q).norm();
@@ -309,7 +304,7 @@ class SurfaceOptimizationProblem {
     const Points nu = nodal_normals(u_);
     normals_.resize(3, Eigen::Index(num_elements()) * num_points());
     for (int e = 0; e < num_elements(); ++e)
-      normals_.middleCols(Eigen::Index(e) * num_points(), num_points()) = point_normals(nu, e);
+      normals_.middleCols(Eigen::Index(e) * num_points(), num_points()) = point_normals(nu, u_, e);
   }
   /// The frozen reference normals of element e (3 x nq).
   auto reference_normals(int e) const { return normals_.middleCols(Eigen::Index(e) * num_points(), num_points()); }
@@ -350,7 +345,7 @@ class SurfaceOptimizationProblem {
     for (int e = 0; e < ne; ++e) {
       Work w;
       gather(X, e, w);
-      const Points n = point_normals(nu, e);
+      const Points n = point_normals(nu, U, e);
       const SurfaceIdealAtPoints& id = ideals_[e];
       double integral = 0.0, area = 0.0;
       bool valid = true;
@@ -387,7 +382,7 @@ class SurfaceOptimizationProblem {
       gather(X, e, w);
       const SurfaceIdealAtPoints& id = ideals_[e];
       const auto n = reference_normals(e);
-      if (!(deltas_[e] > 0.0) && !oriented(w, point_normals(nu, e))) {
+      if (!(deltas_[e] > 0.0) && !oriented(w, point_normals(nu, U, e))) {
         fe[e] = std::numeric_limits<double>::infinity();  // invalid with sigma_0 (consistency, section 4.2.2)
         continue;
       }
@@ -554,23 +549,27 @@ class SurfaceOptimizationProblem {
     w.JP.noalias() = w.X * tab_->shape_gradients;
   }
 
-  /// Unit S_u x S_v at every node of U (3 x N).
+  /// unit_normal at every node of U (3 x N): zero at a degenerate point,
+  /// which point_normals replaces element by element.
   Points nodal_normals(const Coordinates& U) const {
     Points nu(3, U.cols());
-    for (Eigen::Index i = 0; i < U.cols(); ++i) {
-      const Eigen::Matrix<double, 3, 2> d = surface_.derivatives(U.col(i));
-      const Eigen::Vector3d c = d.col(0).cross(d.col(1));
-      const double l = c.norm();
-      nu.col(i) = l > 0.0 ? Eigen::Vector3d(c / l) : Eigen::Vector3d::Zero();
-    }
+    for (Eigen::Index i = 0; i < U.cols(); ++i) nu.col(i) = unit_normal(surface_, Eigen::Vector2d(U.col(i)));
     return nu;
   }
 
-  /// interpolated_nodal_normals at the quadrature points of element e.
-  Points point_normals(const Points& nu, int e) const {
+  /// interpolated_nodal_normals at the quadrature points of element e, from
+  /// the nodal normals nu of nodal_normals(U); a degenerate node's normal is
+  /// its limit from inside e (unit_normal_from).
+  Points point_normals(const Points& nu, const Coordinates& U, int e) const {
     const int n = nodes_per_element();
     Points ne(3, n);
-    for (int i = 0; i < n; ++i) ne.col(i) = nu.col(elements_(i, e));
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (int i = 0; i < n; ++i) mean += U.col(elements_(i, e)) / double(n);
+    for (int i = 0; i < n; ++i) {
+      const int node = elements_(i, e);
+      ne.col(i) = nu.col(node).squaredNorm() > 0.0 ? Eigen::Vector3d(nu.col(node))
+                                                    : unit_normal_from(surface_, Eigen::Vector2d(U.col(node)), mean);
+    }
     Points r = ne * tab_->shape_values.transpose();
     for (Eigen::Index q = 0; q < r.cols(); ++q) {
       const double l = r.col(q).norm();

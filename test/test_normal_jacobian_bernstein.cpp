@@ -1,0 +1,150 @@
+// The surface certificate's polynomial g(xi) = (x_xi x x_eta) . sum_i N_i nu_i
+// in Bernstein form (include/hom/surface/normal_jacobian_bernstein.hpp) and
+// the unit nodal normals it is built from (include/hom/surface/unit_normal.hpp):
+//   - the Bernstein expansion reproduces g, computed independently through
+//     the Lagrange basis, at random points to 1e-12 relative, for curved
+//     triangles and quadrilaterals on a torus at p = 1..10;
+//   - at a pole of the sphere's parameterization the normal is the limit
+//     from inside the element, so an element with a vertex at the pole is
+//     certified valid, while a zero normal there would make it invalid.
+#include <doctest/doctest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "hom/basis/lagrange.hpp"
+#include "hom/element/cube.hpp"
+#include "hom/element/simplex.hpp"
+#include "hom/geometry/sphere.hpp"
+#include "hom/geometry/torus.hpp"
+#include "hom/nodes/gauss_lobatto.hpp"
+#include "hom/nodes/warp_blend.hpp"
+#include "hom/quality/certify.hpp"
+#include "hom/surface/certified_surface.hpp"
+#include "hom/surface/normal_jacobian_bernstein.hpp"
+#include "hom/surface/unit_normal.hpp"
+
+using namespace hom;
+
+namespace {
+
+/// Parameters of the nodes of a reference element of Family mapped affinely
+/// to a patch of size h at (u0, v0), each moved by a random amount up to
+/// `jitter` h (so the element is curved in R^3 by the surface and by the jitter).
+template <ElementFamily Family, NodeSet Nodes>
+Eigen::Matrix2Xd element_parameters(int p, double u0, double v0, double h, double jitter, std::mt19937& rng) {
+  const auto& nodes = lagrange_basis<Family, Nodes>(p).nodes();
+  std::uniform_real_distribution<double> d(-jitter * h, jitter * h);
+  Eigen::Matrix2Xd UV(2, Eigen::Index(nodes.size()));
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const Eigen::Vector2d r =
+        Family::is_simplex ? Eigen::Vector2d(nodes[i]) : Eigen::Vector2d((nodes[i].array() + 1.0) / 2.0);
+    UV.col(Eigen::Index(i)) = Eigen::Vector2d(u0, v0) + h * r + Eigen::Vector2d(d(rng), d(rng));
+  }
+  return UV;
+}
+
+/// g at xi through the Lagrange basis, with the coordinates relative to the
+/// first node (at p = 10 the Lagrange gradients sum to hundreds in magnitude:
+/// an offset would cost the reference digits, not the expansion).
+template <ElementFamily Family, NodeSet Nodes>
+double lagrange_g(int p, const Eigen::Matrix3Xd& X, const Eigen::Matrix3Xd& nu, const typename Family::Point& xi) {
+  const auto& basis = lagrange_basis<Family, Nodes>(p);
+  const Eigen::Matrix3Xd Xc = X.colwise() - X.col(0);
+  const Eigen::Matrix<double, 3, 2> J = Xc * basis.gradient(xi);
+  return J.col(0).cross(J.col(1)).dot(nu * basis.value(xi));
+}
+
+template <ElementFamily Family>
+typename Family::Point random_point(std::mt19937& rng) {
+  std::uniform_real_distribution<double> d(0.0, 1.0);
+  for (;;) {
+    const Eigen::Vector2d x(d(rng), d(rng));
+    if constexpr (Family::is_simplex) {
+      if (x.sum() <= 1.0) return x;
+    } else {
+      return 2.0 * x - Eigen::Vector2d::Ones();
+    }
+  }
+}
+
+template <ElementFamily Family, NodeSet Nodes>
+void check_reproduces_g() {
+  const Torus torus(Eigen::Vector3d(0.3, -0.2, 0.1), Eigen::Vector3d(0.0, 0.6, 0.8), 2.0, 0.7);
+  std::mt19937 rng(7);
+  for (int p = 1; p <= 10; ++p) {
+    CAPTURE(p);
+    const Eigen::Matrix2Xd UV = element_parameters<Family, Nodes>(p, 0.4, 1.1, 0.5, 0.02, rng);
+    Eigen::Matrix3Xd X(3, UV.cols());
+    for (Eigen::Index i = 0; i < UV.cols(); ++i) X.col(i) = torus.evaluate(UV.col(i));
+    const Eigen::Matrix3Xd nu = element_unit_normals(torus, UV);
+    const BernsteinPolynomial<Family> g = normal_jacobian_bernstein<Family, Nodes>(p, X, nu);
+    CHECK(g.space->degree() == normal_jacobian_degree<Family>(p));
+    CHECK(g.coefficients.size() == g.space->size());
+    // Relative to the largest coefficient, as for the planar det (test_certify).
+    const double scale = g.coefficients.cwiseAbs().maxCoeff();
+    double error = 0.0;
+    for (int k = 0; k < 40; ++k) {
+      const auto xi = random_point<Family>(rng);
+      error =
+          std::max(error, std::abs(g.space->evaluate(g.coefficients, xi) - lagrange_g<Family, Nodes>(p, X, nu, xi)));
+    }
+    CHECK(scale > 0.0);
+    CHECK(error <= 1e-12 * scale);
+    for (int v = 0; v < Family::num_vertices; ++v)  // the corner coefficients are values
+      CHECK(std::abs(g.coefficients[g.space->corners()[v]] - lagrange_g<Family, Nodes>(p, X, nu, Family::vertex(v))) <=
+            1e-12 * scale);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("normal jacobian: the Bernstein expansion of g reproduces g on curved triangles, p = 1..10") {
+  check_reproduces_g<Simplex<2>, WarpBlend>();
+}
+
+TEST_CASE("normal jacobian: the Bernstein expansion of g reproduces g on curved quadrilaterals, p = 1..10") {
+  check_reproduces_g<Cube<2>, GaussLobatto>();
+}
+
+TEST_CASE("unit normal: at a pole the normal is the limit from inside the element, and the element certifies valid") {
+  using F = Simplex<2>;
+  using N = WarpBlend;
+  const Sphere sphere(Eigen::Vector3d::Zero(), 1.5);
+  const double pole = std::numbers::pi / 2, h = 0.3;
+  const Eigen::Vector2d at_pole(0.2, pole);
+  CHECK(unit_normal(sphere, at_pole).norm() == 0.0);  // S_u vanishes there: no direction
+  const Eigen::Vector3d limit = unit_normal_from(sphere, at_pole, Eigen::Vector2d(0.2, pole - h));
+  CHECK((limit - Eigen::Vector3d::UnitZ()).norm() < 1e-5);  // the outward normal at the pole
+
+  // A degree-4 triangle with a vertex at the pole: the straight triangle
+  // (S(0, pole - h), S(1, pole - h), pole) with its nodes projected radially
+  // onto the sphere, the nodes' parameters from the sphere's projection.
+  const int p = 4;
+  const auto& nodes = lagrange_basis<F, N>(p).nodes();
+  const Eigen::Vector3d a = sphere.evaluate(Eigen::Vector2d(0.0, pole - h)),
+                        b = sphere.evaluate(Eigen::Vector2d(1.0, pole - h));
+  const Eigen::Vector3d c = sphere.evaluate(at_pole);
+  Eigen::Matrix2Xd UV(2, Eigen::Index(nodes.size()));
+  Eigen::Matrix3Xd X(3, UV.cols());
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const Eigen::Vector2d xi = nodes[i];
+    const Eigen::Vector3d straight = a + xi[0] * (b - a) + xi[1] * (c - a);
+    UV.col(Eigen::Index(i)) = sphere.project(straight);
+    X.col(Eigen::Index(i)) = sphere.evaluate(UV.col(Eigen::Index(i)));
+  }
+  CHECK(UV(1, 2) == doctest::Approx(pole));  // vertex 2 is at the pole
+  const Eigen::Matrix3Xd nu = element_unit_normals(sphere, UV);
+  for (Eigen::Index i = 0; i < nu.cols(); ++i) CHECK(nu.col(i).norm() == doctest::Approx(1.0));
+  const auto valid = certify_surface_element<F, N>(p, X, nu, CertifyOptions{});
+  CHECK(valid.status == Certificate::certified_valid);
+  // With no normal at the pole vertex (vertex 2), g vanishes there.
+  Eigen::Matrix3Xd without = nu;
+  without.col(2).setZero();
+  const auto invalid = certify_surface_element<F, N>(p, X, without, CertifyOptions{});
+  CHECK(invalid.status == Certificate::certified_invalid);
+  REQUIRE(invalid.invalid_point.has_value());
+  CHECK((*invalid.invalid_point - F::vertex(2)).norm() < 1e-12);
+}
