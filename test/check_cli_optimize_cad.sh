@@ -9,9 +9,10 @@
 # report in DESIGN.md's schema. With --certify every element is certified
 # valid and the report says so. A tangled start (0.04 rad) is untangled; a
 # corner fold (0.02 rad) is refused with its element named, or, with
-# --certify, repaired. A linear mesh, options that do not apply on a
-# CAD model, a missing model and a surface mesh without --cad are refused
-# with the documented exit status and no output.
+# --certify, repaired; with --certify and no repair rounds the uncertified
+# CAD face is named with the element. A linear mesh, options that do not
+# apply on a CAD model, a missing model and a surface mesh without --cad are
+# refused with the documented exit status and no output.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -45,7 +46,7 @@ final=$(json_field "$work/opt.json" optimized min_q) || fail "json: no optimized
 
 # 2. --certify: each element, against its nodes' interpolated surface normals, certified valid
 # (Bernstein bounds); the report carries the certificate, and for a surface
-# mesh no scaled-Jacobian bound (that would be the projection's).
+# mesh no scaled-Jacobian bound (it would bound (x_xi x x_eta) . n instead).
 log=$("$hom" optimize "$work/perturbed.msh" --cad "$work/sphere.brep" -o "$work/cert.msh" --json "$work/cert.json" \
         --certify --threads 1 2>&1); rc=$?
 echo "$log" | sed 's/^/  [sphere p=3 --certify] /'
@@ -56,7 +57,7 @@ elements=$(json_field "$work/cert.json" optimized elements) || fail "json: no op
 [[ $(json_field "$work/cert.json" optimized certified_invalid) -eq 0 ]] || fail "json: certified invalid elements"
 [[ $(json_field "$work/cert.json" optimized undecided) -eq 0 ]] || fail "json: undecided elements"
 json_field "$work/cert.json" optimized certified_min_scaled_jacobian >/dev/null 2>&1 \
-  && fail "json: a surface mesh reports a scaled-Jacobian bound of its projections"
+  && fail "json: a surface mesh reports a scaled-Jacobian bound"
 grep -q "^  NOT CERTIFIED" <<<"$log" && fail "optimize --cad --certify: prints NOT CERTIFIED on exit 0"
 
 # 2b. Larger rotations. At 0.04 rad 49 elements are tangled; the surface
@@ -76,6 +77,7 @@ echo "$log" | sed 's/^/  [sphere p=3, 0.04 rad] /'
 "$py" "$helper" perturb "$work/curved.msh" "$work/folded.msh" 0.02 || fail "could not perturb the mesh by 0.02"
 log=$("$hom" optimize "$work/folded.msh" --cad "$work/sphere.brep" -o "$work/folded_opt.msh" --threads 1 2>&1); rc=$?
 echo "$log" | sed 's/^/  [sphere p=3, 0.02 rad] /'
+echo "$log" > "$work/folded_log"
 [[ $rc -eq 3 ]] || fail "optimize --cad at 0.02 rad without --certify: exit $rc, expected 3 (a fold at a node)"
 [[ ! -e "$work/folded_opt.msh" ]] || fail "0.02 rad: an invalid mesh was written"
 grep -Eq "^  element [0-9]+: centroid \(" <<<"$log" || fail "0.02 rad: the refusal does not name the folded element"
@@ -90,6 +92,17 @@ echo "$log" | sed 's/^/  [sphere p=3, 0.02 rad, --certify] /'
 [[ $(json_field "$work/repaired.json" optimized undecided) -eq 0 ]] || fail "0.02 rad: undecided elements remain"
 [[ $(json_field "$work/repaired.json" optimized inverted) -eq 0 ]] || fail "0.02 rad: inverted elements after the repair"
 "$py" "$helper" check "$work/repaired.msh" 1e-9 1e-2 || fail "0.02 rad: repaired nodes are not on the sphere"
+# With no repair rounds the fold stays: the face left uncertified is named,
+# with its element (the one the refusal named) and why its repair stopped.
+log=$("$hom" optimize "$work/folded.msh" --cad "$work/sphere.brep" -o "$work/unrepaired.msh" --certify \
+        --certify-rounds 0 --threads 1 2>&1); rc=$?
+echo "$log" | sed 's/^/  [sphere p=3, 0.02 rad, --certify-rounds 0] /'
+[[ $rc -eq 3 ]] || fail "0.02 rad, no repair rounds: exit $rc, expected 3"
+[[ ! -e "$work/unrepaired.msh" ]] || fail "0.02 rad, no repair rounds: an uncertified mesh was written"
+folded=$(sed -nE 's/^  element ([0-9]+): centroid \(.*/\1/p' "$work/folded_log" | head -1)
+[[ -n $folded ]] || fail "0.02 rad: no element named in the refusal"
+grep -Eq "^ *CAD face [0-9]+: 1 invalid, 0 undecided of [0-9]+ \(elements $folded\); repair stopped: round limit" <<<"$log" \
+  || fail "0.02 rad, no repair rounds: no line naming the uncertified face, element $folded and the round limit"
 
 # 3. Refusals: exit 2 (usage) or 1 (unreadable model), nothing written.
 "$py" "$helper" linear "$work/linear.msh" || fail "could not write a linear sphere mesh"
