@@ -148,3 +148,19 @@ TEST_CASE("unit normal: at a pole the normal is the limit from inside the elemen
   REQUIRE(invalid.invalid_point.has_value());
   CHECK((*invalid.invalid_point - F::vertex(2)).norm() < 1e-12);
 }
+
+TEST_CASE("unit normal: an element straddling a periodic seam has its mean parameters inside it") {
+  const Sphere sphere(Eigen::Vector3d::Zero(), 1.0);
+  const ParameterRange longitude = sphere.range(0);
+  REQUIRE(longitude.periodic);
+  // Three nodes near the seam of the longitude, on both of its sides.
+  Eigen::Matrix2Xd UV(2, 3);
+  UV << longitude.hi - 0.05, longitude.lo + 0.05, longitude.hi - 0.02,  //
+      0.1, 0.1, 0.2;
+  const Eigen::Vector2d mean = mean_parameters(sphere, UV);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i) centroid += sphere.evaluate(UV.col(i)) / 3.0;
+  // The plain mean of the longitudes lies half a turn away, on the far side.
+  CHECK((sphere.evaluate(Eigen::Vector2d(UV.rowwise().mean())) - centroid).norm() > 1.0);
+  CHECK((sphere.evaluate(mean) - centroid).norm() < 0.05);
+}

@@ -839,22 +839,7 @@ class Pipeline {
       all.emplace();
       all->on_surface = true;
     }
-    CertificationOutcome& a = *all;
-    a.initial_valid += face.initial_valid;
-    a.initial_invalid += face.initial_invalid;
-    a.initial_undecided += face.initial_undecided;
-    a.valid += face.valid;
-    a.invalid += face.invalid;
-    a.undecided += face.undecided;
-    a.rounds += face.rounds;
-    a.pull_backs += face.pull_backs;
-    a.sentinel_points = std::max(a.sentinel_points, face.sentinel_points);
-    if (a.reason == RepairStop::certified) a.reason = face.reason;
-    a.restored = a.restored || face.restored;
-    for (int e : face.uncertified) a.uncertified.push_back(patch[e]);
-    std::sort(a.uncertified.begin(), a.uncertified.end());
-    a.repairs.insert(a.repairs.end(), face.repairs.begin(), face.repairs.end());
-    a.time_s += face.time_s;
+    all->add(face, patch);
   }
 
   /// One line per CAD face left uncertified: which face, which elements

@@ -147,6 +147,38 @@ struct CertificationOutcome {
   bool on_surface = false;
 
   bool certified() const { return invalid == 0 && undecided == 0; }
+
+  /// Takes the final state from `last` (the certificate at the end: counts,
+  /// bound, uncertified elements); the initial counts, rounds and reason stay.
+  void set_final(const CertificationOutcome& last) {
+    valid = last.valid;
+    invalid = last.invalid;
+    undecided = last.undecided;
+    min_scaled_jacobian = last.min_scaled_jacobian;
+    uncertified = last.uncertified;
+  }
+
+  /// Adds the outcome of another part of the mesh (a CAD face's stage, say):
+  /// counts, rounds and times add up, the first part left uncertified gives
+  /// the reason, and `element_of` maps part's element numbers to this one's.
+  void add(const CertificationOutcome& part, const std::vector<int>& element_of) {
+    initial_valid += part.initial_valid;
+    initial_invalid += part.initial_invalid;
+    initial_undecided += part.initial_undecided;
+    valid += part.valid;
+    invalid += part.invalid;
+    undecided += part.undecided;
+    min_scaled_jacobian = std::min(min_scaled_jacobian, part.min_scaled_jacobian);
+    rounds += part.rounds;
+    pull_backs += part.pull_backs;
+    sentinel_points = std::max(sentinel_points, part.sentinel_points);
+    if (reason == RepairStop::certified) reason = part.reason;
+    restored = restored || part.restored;
+    for (int e : part.uncertified) uncertified.push_back(element_of[e]);
+    std::sort(uncertified.begin(), uncertified.end());
+    repairs.insert(repairs.end(), part.repairs.begin(), part.repairs.end());
+    time_s += part.time_s;
+  }
 };
 
 /// The tabulation of `base` followed by `sentinels` (reference points), each
@@ -391,12 +423,7 @@ CertificationOutcome certify_and_repair(Mesh<Family, Nodes, Family::dim>& mesh, 
     cert = std::move(start_cert);
     out.restored = true;
   }
-  const CertificationOutcome final_state = certification_outcome(cert, out.reason);
-  out.valid = final_state.valid;
-  out.invalid = final_state.invalid;
-  out.undecided = final_state.undecided;
-  out.min_scaled_jacobian = final_state.min_scaled_jacobian;
-  out.uncertified = final_state.uncertified;
+  out.set_final(certification_outcome(cert, out.reason));
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -278,12 +278,7 @@ CertificationOutcome certify_and_repair_surface(Mesh<Family, Nodes, 3>& mesh, co
     cert = cert_start;
     out.restored = true;
   }
-  const CertificationOutcome final_state = certification_outcome(cert, out.reason);
-  out.valid = final_state.valid;
-  out.invalid = final_state.invalid;
-  out.undecided = final_state.undecided;
-  out.min_scaled_jacobian = final_state.min_scaled_jacobian;
-  out.uncertified = final_state.uncertified;
+  out.set_final(certification_outcome(cert, out.reason));
   out.on_surface = true;
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

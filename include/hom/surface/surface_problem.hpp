@@ -173,10 +173,7 @@ SurfaceNormals interpolated_nodal_normals(const Tabulation<Family>& tab, const G
   SurfaceNormals r;
   r.nodes = element_unit_normals(g, UV);
   r.points = r.nodes * tab.shape_values.transpose();
-  for (Eigen::Index q = 0; q < r.points.cols(); ++q) {
-    const double l = r.points.col(q).norm();
-    r.points.col(q) = l > 0.0 ? Eigen::Vector3d(r.points.col(q) / l) : Eigen::Vector3d::Zero();
-  }
+  normalize_or_zero(r.points);
   return r;
 }
 
@@ -562,19 +559,17 @@ class SurfaceOptimizationProblem {
   /// its limit from inside e (unit_normal_from).
   Points point_normals(const Points& nu, const Coordinates& U, int e) const {
     const int n = nodes_per_element();
-    Points ne(3, n);
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (int i = 0; i < n; ++i) mean += U.col(elements_(i, e)) / double(n);
+    Eigen::Matrix2Xd Ue(2, n);
+    for (int i = 0; i < n; ++i) Ue.col(i) = U.col(elements_(i, e));
+    const Eigen::Vector2d mean = mean_parameters(surface_, Ue);
+    Eigen::Matrix3Xd ne(3, n);
     for (int i = 0; i < n; ++i) {
       const int node = elements_(i, e);
       ne.col(i) = nu.col(node).squaredNorm() > 0.0 ? Eigen::Vector3d(nu.col(node))
-                                                    : unit_normal_from(surface_, Eigen::Vector2d(U.col(node)), mean);
+                                                   : unit_normal_from(surface_, Eigen::Vector2d(Ue.col(i)), mean);
     }
-    Points r = ne * tab_->shape_values.transpose();
-    for (Eigen::Index q = 0; q < r.cols(); ++q) {
-      const double l = r.col(q).norm();
-      r.col(q) = l > 0.0 ? Eigen::Vector3d(r.col(q) / l) : Eigen::Vector3d::Zero();
-    }
+    Eigen::Matrix3Xd r = ne * tab_->shape_values.transpose();
+    normalize_or_zero(r);
     return r;
   }
 

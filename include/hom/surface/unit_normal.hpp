@@ -31,22 +31,48 @@ Eigen::Vector3d unit_normal(const Surface& surface, const Eigen::Vector2d& u) {
 
 /// unit_normal at u, or at a degenerate point its limit from the direction
 /// of `inside` (parameters inside the element); zero if that is degenerate too.
+/// Periodic parameters of `inside` are taken next to u's, so the step does
+/// not run the long way round a seam.
 template <SurfaceGeometry Surface>
 Eigen::Vector3d unit_normal_from(const Surface& surface, const Eigen::Vector2d& u, const Eigen::Vector2d& inside) {
   const Eigen::Vector3d n = unit_normal(surface, u);
   if (n.squaredNorm() > 0.0) return n;
+  Eigen::Vector2d towards;
+  for (int k = 0; k < 2; ++k) towards[k] = surface.range(k).unwrap(inside[k], u[k]) - u[k];
   constexpr double step = 1e-6;  // of the way to `inside`: far above round-off, a negligible tilt of the normal
-  return unit_normal(surface, Eigen::Vector2d(u + step * (inside - u)));
+  return unit_normal(surface, Eigen::Vector2d(u + step * towards));
+}
+
+/// The mean of an element's node parameters UV (2 x n), periodic ones
+/// unwrapped next to node 0's: a point inside the element even when its
+/// nodes straddle a seam.
+template <SurfaceGeometry Surface>
+Eigen::Vector2d mean_parameters(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (int k = 0; k < 2; ++k) {
+    const ParameterRange range = surface.range(k);
+    for (Eigen::Index i = 0; i < UV.cols(); ++i) mean[k] += range.unwrap(UV(k, i), UV(k, 0));
+  }
+  return mean / double(UV.cols());
 }
 
 /// unit_normal_from at each node of an element with parameters UV (2 x n),
-/// from the direction of the element's mean parameters (UV unwrapped).
+/// from the direction of the element's mean parameters.
 template <SurfaceGeometry Surface>
 Eigen::Matrix3Xd element_unit_normals(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV) {
-  const Eigen::Vector2d mean = UV.rowwise().mean();
+  const Eigen::Vector2d mean = mean_parameters(surface, UV);
   Eigen::Matrix3Xd nu(3, UV.cols());
   for (Eigen::Index i = 0; i < UV.cols(); ++i) nu.col(i) = unit_normal_from(surface, UV.col(i), mean);
   return nu;
+}
+
+/// Each column of n (3 x m, interpolated nodal normals) scaled to unit
+/// length, or zero where it vanishes.
+inline void normalize_or_zero(Eigen::Matrix3Xd& n) {
+  for (Eigen::Index q = 0; q < n.cols(); ++q) {
+    const double l = n.col(q).norm();
+    n.col(q) = l > 0.0 ? Eigen::Vector3d(n.col(q) / l) : Eigen::Vector3d::Zero();
+  }
 }
 
 }  // namespace hom
