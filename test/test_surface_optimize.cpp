@@ -401,7 +401,7 @@ TEST_CASE_TEMPLATE("independence of the parameterization (proposition 5.2): phi^
   }
 }
 
-TEST_CASE("optimize_boundary_face: a volume mesh's face folded in its plane is repaired on it, nothing else moves") {
+TEST_CASE("optimize_boundary_face: a volume mesh's face folded in its plane is repaired on it (and certified), nothing else moves") {
   // The unit box of Kuhn tetrahedra at p = 3; its face z = 0 is entity
   // {2, 5} (structured.hpp). The nodes inside that face are moved in the
   // plane until some of its triangles fold; the face's optimum is the
@@ -429,10 +429,13 @@ TEST_CASE("optimize_boundary_face: a volume mesh's face folded in its plane is r
     o.objective_tolerance = 1e-14;
     o.quality_tolerance = 1e-12;
     o.threads = 1;
+    o.certify = normal.z() < 0;  // once with the face certified after the optimization
     const auto r = optimize_boundary_face(mesh, 5, Plane(Eigen::Vector3d::Zero(), normal), o);
     REQUIRE(r);
-    CHECK(r->result.initial_inverted > 0);
-    CHECK(r->inverted() == 0);
+    CHECK(r->optimization.result.initial_inverted > 0);
+    CHECK(r->optimization.inverted() == 0);
+    REQUIRE(bool(r->certification) == o.certify);
+    if (o.certify) CHECK(r->certification->certified());
     double back = 0.0;
     for (int i : moved) {
       CHECK(std::abs(mesh.node(i).z()) < 1e-14);

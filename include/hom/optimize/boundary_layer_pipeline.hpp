@@ -99,7 +99,8 @@ struct BoundaryLayerPipelineOptions {
   bool stop_if_smoothed_invalid = true;
   /// 3D, at the start of (e): optimize the nodes on every non-wall boundary
   /// face that `geometry` has a surface for on that surface (chapter 5,
-  /// surface/optimize_boundary_face.hpp), the face's edges held. The layer's
+  /// surface/optimize_boundary_face.hpp), the face's edges held, then
+  /// certify these faces and repair their folds on them. The layer's
   /// triangles on the box faces a wing section meets are curved along the
   /// wall's border; the volume optimizer holds them, so one folded in its
   /// plane would leave its tetrahedron inverted at that node.
@@ -317,7 +318,7 @@ inline void record_optimization(BoundaryLayerStage& s, const OptimizeResult& r) 
 }
 
 /// BoundaryLayerPipelineOptions::optimize_side_faces: returns the surface
-/// optimizer's iterations over all faces. (A template, although only Dim = 3
+/// optimizer's iterations over all faces, repair rounds included. (A template, although only Dim = 3
 /// is used, so that the surface optimizer is instantiated where the pipeline
 /// is, not in every file that includes this header.)
 template <int Dim>
@@ -335,9 +336,17 @@ int optimize_side_faces(Mesh<Simplex<Dim>>& mesh, const std::vector<int>& walls,
   o.threads = options.high_order_optimize.threads;
   o.max_iterations = options.high_order_optimize.max_iterations;
   o.verbose = options.high_order_optimize.verbose;
+  // Always certified: a triangle folded at a node cannot be mended by (e),
+  // which holds these nodes, and the faces are small.
+  o.certify = true;
+  o.certify_depth = options.high_order_optimize.certify_depth;
+  o.certify_rounds = options.high_order_optimize.certify_rounds;
   int iterations = 0;
   for (int f : faces)
-    if (const auto r = optimize_boundary_face(mesh, f, *geometry.surface(f), o)) iterations += r->result.iterations;
+    if (const auto r = optimize_boundary_face(mesh, f, *geometry.surface(f), o)) {
+      iterations += r->optimization.result.iterations;
+      for (const SolverResult& round : r->certification->repairs) iterations += round.iterations;
+    }
   return iterations;
 }
 

@@ -4,7 +4,12 @@
 /// boundary facets on face entity `face_tag` are optimized on that face's
 /// surface in (u, v) (optimize_surface.hpp, eq 5.22), each facet against its
 /// straight-sided counterpart (the volume mesh's ideal vertices); the nodes
-/// on the face's edges and vertices stay, as do fixed nodes.
+/// on the face's edges and vertices stay, as do fixed nodes. With
+/// options.certify the face is then certified (Bernstein bounds of the
+/// surface Jacobian, surface/certified_surface.hpp) and its uncertified
+/// triangles repaired on the surface: a triangle folded between the
+/// quadrature points, at a node say, passes the optimizer's test and still
+/// leaves its tetrahedron inverted there.
 ///
 /// The CAD pipeline optimizes every CAD face before the volume (section 6.1,
 /// steps 5-6; src/curve). The boundary-layer pipeline needs it for the faces
@@ -25,16 +30,22 @@
 #include "hom/geometry/surface_geometry.hpp"
 #include "hom/io/msh.hpp"
 #include "hom/mesh/mesh.hpp"
+#include "hom/surface/certified_surface.hpp"
 #include "hom/surface/optimize_surface.hpp"
 
 namespace hom {
+
+struct BoundaryFaceResult {
+  SurfaceOptimizeResult optimization;
+  std::optional<CertificationOutcome> certification;  ///< with options.certify
+};
 
 /// Optimizes the nodes of `mesh` on face entity `face_tag` on `surface` (see
 /// the file comment); options.solver must be newton (the surface problems
 /// are small). Returns nothing when the face has no facet of `mesh` or no
 /// free node.
 template <class Measure = ShapeMeasure, QuadraturePolicy Q = DefaultExactness, NodeSet Nodes, SurfaceGeometry Surface>
-std::optional<SurfaceOptimizeResult> optimize_boundary_face(Mesh<Simplex<3>, Nodes, 3>& mesh, int face_tag,
+std::optional<BoundaryFaceResult> optimize_boundary_face(Mesh<Simplex<3>, Nodes, 3>& mesh, int face_tag,
                                                             const Surface& surface, const OptimizeOptions& options,
                                                             const Measure& measure = {}) {
   using FaceMesh = Mesh<Simplex<2>, Nodes, 3>;
@@ -96,7 +107,12 @@ std::optional<SurfaceOptimizeResult> optimize_boundary_face(Mesh<Simplex<3>, Nod
 
   OptimizeOptions o = options;
   o.ideal = IdealKind::straight_sided;
-  const auto r = optimize_surface<Measure, Q>(face, surface, uv, o, measure);
+  const Eigen::Matrix2Xd uv_start = uv;
+  BoundaryFaceResult r{optimize_surface<Measure, Q>(face, surface, uv, o, measure), std::nullopt};
+  if (o.certify)
+    r.certification = certify_and_repair_surface<Measure, Q>(
+        face, surface, uv, surface_ideals(face, o.ideal), o.solver_options(), o.certify_repair_options(), o.threads,
+        o.regularization_alpha, measure, &uv_start);
   for (int k = 0; k < n; ++k) {
     if (!free[k]) continue;
     mesh.node(global[k]) = face.node(k);
