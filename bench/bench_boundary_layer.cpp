@@ -30,13 +30,14 @@
 ///               stack on the wall border (held at the planes z = 0 and
 ///               z = span) sit along the bisector, only ~0.04 H_k above
 ///               either surface, and the thin levels there stay inverted
-///               (8 elements at the two border ends in our measurements).
+///               (10 elements, levels 0-3, in the spanwise rows next to the
+///               box faces, x = 0.977-0.991; 2026-12-03).
 ///               The quick NACA 0012 wing gets through every stage (its
 ///               leading edge's stacks at the border are isoparametric,
-///               boundary_layer.hpp) but ends with det < 0 at a node
-///               (min scaled Jacobian -0.141, level-0 elements with a facet
-///               on the box faces, after those faces' 14 + 14 triangles
-///               folded in their planes were unfolded at the start of (e));
+///               boundary_layer.hpp) and ends valid: the optimizer leaves
+///               56 layer elements near the box faces valid at every
+///               quadrature point but folded at a free layer vertex, and
+///               the certify-and-repair stage mends them in one round;
 ///   stretching  first-layer heights giving aspect ratios about 1:10^2,
 ///               1:10^4, 1:10^6 and 1:10^8 on a 2D quarter annulus (inner
 ///               circle of diameter 1 as the wall, Circle<2>), p = 2 and 4:
