@@ -319,8 +319,8 @@ class Runner {
         for (const auto& [name, row] : *info.thesis)
           if (name == st.name) th = &row;
       const auto& q = st.quality;
-      std::printf("   %-9s %2d %7d %8d %6.3f %6.3f %6.3f %6.3f %6d %7.3f %5d %8.2f", st.name.c_str(), st.p, st.elements,
-                  st.nodes, q.min, q.max, q.mean, q.std_dev, q.inverted, st.scaled_jacobian.min, st.iterations, st.time_s);
+      print_statistics(st.name, st.p, st.elements, st.nodes, q, st.scaled_jacobian.min);
+      std::printf(" %5d %8.2f", st.iterations, st.time_s);
       if (th)
         std::printf("   | %*s %6d %8d %5.2f %5.2f %5.2f %5.2f %5d", int(info.table.size()) + 7, "", th->elements, th->nodes,
                     th->min_q, th->max_q, th->mean_q, th->std_q, th->inverted);
@@ -381,16 +381,15 @@ class Runner {
     const auto q = hom::mesh_quality(r.mesh, hom::ShapeMeasure{}, hom::IdealKind::regular,
                                      hom::quadrature_for<hom::Simplex<Dim>, hom::DefaultExactness>(r.mesh.degree()));
     const hom::Statistics s = q.quality_statistics(), sj = q.scaled_jacobian_statistics();
-    std::printf("   %-9s %2d %7d %8d %6.3f %6.3f %6.3f %6.3f %6d %7.3f   (absolute: equilateral ideal)\n", "optimized",
-                r.mesh.degree(), r.mesh.num_elements(), r.mesh.num_nodes(), s.min, s.max, s.mean, s.std_dev, s.inverted,
-                sj.min);
+    print_statistics("optimized", r.mesh.degree(), r.mesh.num_elements(), r.mesh.num_nodes(), s, sj.min);
+    std::printf("   (absolute: equilateral ideal)\n");
     hom::io::CaseHeader h{info.name, info.family, r.mesh.degree(), r.mesh.num_elements(), r.mesh.num_nodes(),
                           "optimized", "shape", "equilateral"};
     cases_.push_back(hom::io::quality_case(h, s, sj).set("aspect_ratio", info.aspect_ratio).set("wall", info.wall));
     std::fflush(stdout);
   }
 
-  /// The certify stage of (e) (--certify), when it ran.
+  /// The certify stage of (e) (on unless --no-certify), when it ran.
   template <int Dim>
   void report_certification(const hom::BoundaryLayerPipelineResult<Dim>& r) const {
     if (!r.certification) return;
@@ -399,6 +398,13 @@ class Runner {
                 "%d invalid, %d undecided (%s, %.2f s)\n",
                 c.initial_invalid, c.initial_undecided, c.rounds, c.valid, c.invalid, c.undecided,
                 std::string(hom::to_string(c.reason)).c_str(), c.time_s);
+  }
+
+  /// One row of the stage table: stage, p, size, quality statistics, min scaled Jacobian (no newline).
+  static void print_statistics(const std::string& stage, int p, int elements, int nodes, const hom::Statistics& q,
+                               double min_sj) {
+    std::printf("   %-9s %2d %7d %8d %6.3f %6.3f %6.3f %6.3f %6d %7.3f", stage.c_str(), p, elements, nodes, q.min, q.max,
+                q.mean, q.std_dev, q.inverted, min_sj);
   }
 
   /// VTU files of the inserted, smoothed and final meshes (--vtu-dir).
