@@ -450,6 +450,67 @@ TEST_CASE("optimize_boundary_face: a volume mesh's face folded in its plane is r
   CHECK_FALSE(optimize_boundary_face(mesh, 99, Plane(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 1)), OptimizeOptions{}));
 }
 
+TEST_CASE("optimize_boundary_face: with element ideals, each facet is measured against its element's ideal's face") {
+  // Linear Kuhn tetrahedra of the unit box, 3 cells a side: the face z = 0
+  // (entity {2, 5}) has 4 inside nodes. The element ideals are the elements
+  // of a second, conformal mesh whose inside face nodes sit at other points
+  // q of the plane: the face's optimum is then every node at its q (f = 0),
+  // whichever way the plane's normal points (with +z the facets, and their
+  // ideals, are mirrored for the optimizer). Without the element ideals the
+  // face is measured against its own straight-sided mesh and goes back there.
+  const int n = 3;
+  const double spacing = 1.0 / n;
+  const auto start = structured_mesh<Simplex<3>, WarpBlend>({n, n, n});
+  auto target = start;
+  std::vector<int> inside;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.25 * spacing, 0.25 * spacing);
+  for (int i = 0; i < start.num_nodes(); ++i) {
+    const auto& c = start.node_class(i);
+    if (c.entity && c.entity->dim == 2 && c.entity->tag == 5) {
+      target.node(i) += Eigen::Vector3d(u(rng), u(rng), 0.0);
+      inside.push_back(i);
+    }
+  }
+  REQUIRE(inside.size() == 4);
+  std::vector<IdealVertices<Simplex<3>>> v(start.num_elements());
+  for (int e = 0; e < start.num_elements(); ++e)
+    for (int k = 0; k < 4; ++k) v[e].col(k) = target.node(target.vertex(e, k));
+  const IdealMesh<Simplex<3>> ideals(std::move(v));
+  OptimizeOptions o;
+  o.max_iterations = 200;
+  o.gradient_tolerance = 1e-12;
+  o.objective_tolerance = 1e-16;
+  o.quality_tolerance = 1e-12;
+  o.threads = 1;
+  for (const Eigen::Vector3d& normal : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, -1)}) {
+    CAPTURE(normal.z());
+    const Plane plane(Eigen::Vector3d::Zero(), normal);
+    auto mesh = start;
+    // Fold the face: one inside node over its neighbour, towards the middle.
+    const Eigen::Vector3d over(start.node(inside[0]).x() < 0.5 ? 1.2 * spacing : -1.2 * spacing, 0.0, 0.0);
+    mesh.node(inside[0]) += over;
+    const auto r = optimize_boundary_face(mesh, 5, plane, o, ShapeMeasure{}, &ideals);
+    REQUIRE(r);
+    CHECK(r->optimization.result.initial_inverted > 0);
+    CHECK(r->optimization.inverted() == 0);
+    for (int i : inside) {
+      CHECK(std::abs(mesh.node(i).z()) < 1e-14);
+      CHECK((mesh.node(i) - target.node(i)).norm() < 1e-2 * spacing);
+    }
+    auto own = start;
+    own.node(inside[0]) += over;
+    REQUIRE(optimize_boundary_face(own, 5, plane, o));
+    for (int i : inside) CHECK((own.node(i) - start.node(i)).norm() < 1e-2 * spacing);
+  }
+  // One ideal per element, or a clear error.
+  auto mesh = start;
+  const IdealMesh<Simplex<3>> short_ideals = IdealMesh<Simplex<3>>::regular(3);
+  CHECK_THROWS_AS(optimize_boundary_face(mesh, 5, Plane(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 1)), o,
+                                         ShapeMeasure{}, &short_ideals),
+                  std::invalid_argument);
+}
+
 TEST_CASE_TEMPLATE("p-continuation on a surface: the linear sub-problem on z = 0 is the planar one", C, HOM_SURFACE_CASES) {
   using F = typename C::Family;
   using N = typename C::Nodes;

@@ -15,7 +15,10 @@
 ///                   (chapter 4), the wall and outer boundary nodes fixed
 ///                   (every node not classified free is held; the layer's
 ///                   nodes on the wall border first go to their full
-///                   heights, since they cannot move);
+///                   heights, then, in 3D, slide on their faces: the
+///                   faces are optimized on their surfaces first against
+///                   the faces of the stretched ideal; see
+///                   BoundaryLayerPipelineOptions::optimize_side_faces);
 ///   (d) "curved"    (c) elevated to degree p, its wall nodes put on the
 ///                   geometry (geometry/curve_boundary.hpp) and, unless
 ///                   carry_layer is off, the layer's free nodes (and its
@@ -97,13 +100,17 @@ struct BoundaryLayerPipelineOptions {
   /// Stop after (c) when the smoothed linear mesh still has inverted
   /// elements (file comment); off runs (d) and (e) whatever (c) left.
   bool stop_if_smoothed_invalid = true;
-  /// 3D, at the start of (e): optimize the nodes on every non-wall boundary
-  /// face that `geometry` has a surface for on that surface (chapter 5,
-  /// surface/optimize_boundary_face.hpp), the face's edges held, then
-  /// certify these faces and repair their folds on them. The layer's
-  /// triangles on the box faces a wing section meets are curved along the
-  /// wall's border; the volume optimizer holds them, so one folded in its
-  /// plane would leave its tetrahedron inverted at that node.
+  /// 3D, before the volume at (c) and at (e): optimize the nodes on every
+  /// non-wall boundary face that `geometry` has a surface for on that
+  /// surface (chapter 5, surface/optimize_boundary_face.hpp), the face's
+  /// edges held; at (c) against the faces of the stretched ideal, at (e)
+  /// against the smoothed linear mesh, then certified and their folds
+  /// repaired on the surface. The volume optimizer holds these nodes, so a
+  /// triangle folded in its face leaves its tetrahedron inverted whatever
+  /// the free nodes do: at (c), the SD7003 wing's layer triangles at the
+  /// 4-degree trailing edge on both box faces (the border nodes' full
+  /// heights along the averaged normal fold them); at (e), triangles curved
+  /// along the wall's border.
   bool optimize_side_faces = true;
   /// Called after each stage with its name, e.g. to print progress.
   std::function<void(const std::string&)> progress;
@@ -317,15 +324,18 @@ inline void record_optimization(BoundaryLayerStage& s, const OptimizeResult& r) 
   s.stop_reason = std::string(to_string(r.result.reason));
 }
 
-/// BoundaryLayerPipelineOptions::optimize_side_faces: returns the surface
-/// optimizer's iterations over all faces, repair rounds included. (A template, although only Dim = 3
-/// is used, so that the surface optimizer is instantiated where the pipeline
-/// is, not in every file that includes this header.)
+/// BoundaryLayerPipelineOptions::optimize_side_faces: optimizes the nodes on
+/// every non-wall face of `mesh` that `geometry` has a surface for, on that
+/// surface, against `ideal` (per element) or, without it, the mesh's
+/// straight-sided ideal; `certify` adds the certify-and-repair stage on each
+/// face. Returns the surface optimizer's iterations over all faces, repair
+/// rounds included. (A template, although only Dim = 3 is used, so that the
+/// surface optimizer is instantiated where the pipeline is, not in every
+/// file that includes this header.)
 template <int Dim>
 int optimize_side_faces(Mesh<Simplex<Dim>>& mesh, const std::vector<int>& walls, const GeometryModel<Dim>& geometry,
-                        const BoundaryLayerPipelineOptions& options) {
+                        const OptimizeOptions& stage, bool certify, const IdealMesh<Simplex<Dim>>* ideal = nullptr) {
   static_assert(Dim == 3, "hom::detail::optimize_side_faces: the faces of a tetrahedral mesh");
-  if (!options.optimize_side_faces) return 0;
   std::vector<int> faces;
   for (const auto& f : mesh.boundary_facets())
     if (std::find(walls.begin(), walls.end(), f.entity_tag) == walls.end() && geometry.surface(f.entity_tag) &&
@@ -333,19 +343,18 @@ int optimize_side_faces(Mesh<Simplex<Dim>>& mesh, const std::vector<int>& walls,
       faces.push_back(f.entity_tag);
   OptimizeOptions o;
   o.solver = SolverKind::newton;
-  o.threads = options.high_order_optimize.threads;
-  o.max_iterations = options.high_order_optimize.max_iterations;
-  o.verbose = options.high_order_optimize.verbose;
-  // Always certified: a triangle folded at a node cannot be mended by (e),
-  // which holds these nodes, and the faces are small.
-  o.certify = true;
-  o.certify_depth = options.high_order_optimize.certify_depth;
-  o.certify_rounds = options.high_order_optimize.certify_rounds;
+  o.threads = stage.threads;
+  o.max_iterations = stage.max_iterations;
+  o.verbose = stage.verbose;
+  o.certify = certify;
+  o.certify_depth = stage.certify_depth;
+  o.certify_rounds = stage.certify_rounds;
   int iterations = 0;
   for (int f : faces)
-    if (const auto r = optimize_boundary_face(mesh, f, *geometry.surface(f), o)) {
+    if (const auto r = optimize_boundary_face(mesh, f, *geometry.surface(f), o, ShapeMeasure{}, ideal)) {
       iterations += r->optimization.result.iterations;
-      for (const SolverResult& round : r->certification->repairs) iterations += round.iterations;
+      if (r->certification)
+        for (const SolverResult& round : r->certification->repairs) iterations += round.iterations;
     }
   return iterations;
 }
@@ -384,12 +393,21 @@ BoundaryLayerPipelineResult<Dim> boundary_layer_pipeline(const Mesh<Simplex<Dim>
   out.stages.back().time_s = insert_s;
   progress(out.stages.back());
 
-  // (c): the held border nodes first go to their heights (boundary_layer.hpp).
+  // (c): the held border nodes first go to their heights (boundary_layer.hpp),
+  // then, in 3D, slide on their faces against the faces of the stretched
+  // ideal (the volume holds them).
   out.smoothed = out.layer.mesh;
   for (int n : out.layer.border_nodes) out.smoothed.node(n) = out.layer.full_height_positions.col(n);
+  t = Clock::now();
+  if constexpr (Dim == 3)
+    if (options.optimize_side_faces)
+      out.boundary_face_iterations += detail::optimize_side_faces(out.smoothed, wall_tags, geometry,
+                                                                  options.linear_optimize, false, &out.layer.ideal);
+  const double linear_faces_s = seconds_since(t);
   const auto rc = optimize(out.smoothed, out.layer.ideal, options.linear_optimize);
   out.stages.push_back(detail::measure_stage(out.smoothed, out.layer.ideal, "smoothed", "layer"));
   detail::record_optimization(out.stages.back(), rc);
+  out.stages.back().time_s += linear_faces_s;
   progress(out.stages.back());
   if (options.stop_if_smoothed_invalid && out.stages.back().quality.inverted > 0) {
     out.mesh = out.smoothed;
@@ -413,7 +431,12 @@ BoundaryLayerPipelineResult<Dim> boundary_layer_pipeline(const Mesh<Simplex<Dim>
   // (e): first the faces the layer meets besides the wall, on their surfaces
   // (chapter 5; their nodes are held in the volume), then the volume.
   t = Clock::now();
-  if constexpr (Dim == 3) out.boundary_face_iterations = detail::optimize_side_faces(out.mesh, wall_tags, geometry, options);
+  if constexpr (Dim == 3)
+    if (options.optimize_side_faces)
+      // Always certified: a triangle folded at a node cannot be mended by
+      // the volume stage, which holds these nodes, and the faces are small.
+      out.boundary_face_iterations +=
+          detail::optimize_side_faces(out.mesh, wall_tags, geometry, options.high_order_optimize, true);
   const double faces_s = seconds_since(t);
   const auto re = optimize(out.mesh, linear_ideal, options.high_order_optimize);
   out.stages.push_back(detail::measure_stage(out.mesh, linear_ideal, "optimized", "smoothed-linear"));

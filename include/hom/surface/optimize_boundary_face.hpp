@@ -12,7 +12,10 @@
 /// leaves its tetrahedron inverted there.
 ///
 /// The CAD pipeline optimizes every CAD face before the volume (section 6.1,
-/// steps 5-6; src/curve). The boundary-layer pipeline needs it for the faces
+/// steps 5-6; src/curve). With `element_ideals` each facet is measured
+/// against its element's ideal's face instead (the boundary-layer
+/// pipeline's stage (c), whose stretched ideal is per element). The
+/// boundary-layer pipeline needs it for the faces
 /// its layer meets without being its wall (the box faces a wing section
 /// spans): the layer's triangles there are curved along the wall's border
 /// curve, the volume optimizer holds their nodes, and a triangle folded in
@@ -22,6 +25,8 @@
 ///     hom::optimize_boundary_face(mesh, 4, plane, options);
 
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -30,10 +35,27 @@
 #include "hom/geometry/surface_geometry.hpp"
 #include "hom/io/msh.hpp"
 #include "hom/mesh/mesh.hpp"
+#include "hom/quality/ideal.hpp"
 #include "hom/surface/certified_surface.hpp"
 #include "hom/surface/optimize_surface.hpp"
 
 namespace hom {
+
+namespace detail {
+
+/// The face of an element's ideal `element_ideal` under boundary facet `f`,
+/// its vertices in the order of f.vertices (facet_node_ids' first three).
+template <NodeSet Nodes>
+SurfaceIdealVertices<Simplex<2>> facet_ideal(const Mesh<Simplex<3>, Nodes, 3>& mesh, const BoundaryFacet<Simplex<3>>& f,
+                                             const IdealVertices<Simplex<3>>& element_ideal) {
+  SurfaceIdealVertices<Simplex<2>> v;
+  for (int k = 0; k < 3; ++k)
+    for (int local = 0; local < 4; ++local)
+      if (mesh.vertex(f.element, local) == f.vertices[k]) v.col(k) = element_ideal.col(local);
+  return v;
+}
+
+}  // namespace detail
 
 struct BoundaryFaceResult {
   SurfaceOptimizeResult optimization;
@@ -43,16 +65,25 @@ struct BoundaryFaceResult {
 /// Optimizes the nodes of `mesh` on face entity `face_tag` on `surface` (see
 /// the file comment); options.solver must be newton (the surface problems
 /// are small). Returns nothing when the face has no facet of `mesh` or no
-/// free node.
+/// free node. `element_ideals`, when given, holds one ideal per element of
+/// `mesh` (file comment).
 template <class Measure = ShapeMeasure, QuadraturePolicy Q = DefaultExactness, NodeSet Nodes, SurfaceGeometry Surface>
 std::optional<BoundaryFaceResult> optimize_boundary_face(Mesh<Simplex<3>, Nodes, 3>& mesh, int face_tag,
                                                             const Surface& surface, const OptimizeOptions& options,
-                                                            const Measure& measure = {}) {
+                                                            const Measure& measure = {},
+                                                            const IdealMesh<Simplex<3>>* element_ideals = nullptr) {
   using FaceMesh = Mesh<Simplex<2>, Nodes, 3>;
   const int p = mesh.degree();
+  if (element_ideals && element_ideals->size() != mesh.num_elements())
+    throw std::invalid_argument("hom::optimize_boundary_face: " + std::to_string(element_ideals->size()) +
+                                " element ideals for " + std::to_string(mesh.num_elements()) + " elements");
   std::vector<std::vector<int>> facets;
-  for (const auto& f : mesh.boundary_facets())
-    if (f.entity_tag == face_tag) facets.push_back(mesh.facet_node_ids(f));
+  std::vector<SurfaceIdealVertices<Simplex<2>>> facet_ideals;  // with element_ideals, in facet vertex order
+  for (const auto& f : mesh.boundary_facets()) {
+    if (f.entity_tag != face_tag) continue;
+    facets.push_back(mesh.facet_node_ids(f));
+    if (element_ideals) facet_ideals.push_back(detail::facet_ideal(mesh, f, element_ideals->vertices(f.element)));
+  }
   if (facets.empty()) return std::nullopt;
 
   // The face's nodes, numbered locally.
@@ -90,6 +121,11 @@ std::optional<BoundaryFaceResult> optimize_boundary_face(Mesh<Simplex<3>, Nodes,
     const auto turned = conn;
     for (Eigen::Index e = 0; e < conn.cols(); ++e)
       for (Eigen::Index i = 0; i < conn.rows(); ++i) conn(i, e) = turned(mirror[i], e);
+    // The vertex nodes come first, so mirror's first three entries turn the vertices.
+    for (auto& v : facet_ideals) {
+      const SurfaceIdealVertices<Simplex<2>> unturned = v;
+      for (int i = 0; i < 3; ++i) v.col(i) = unturned.col(mirror[i]);
+    }
   }
 
   FaceMesh face(p, std::move(X), std::move(conn));
@@ -107,12 +143,13 @@ std::optional<BoundaryFaceResult> optimize_boundary_face(Mesh<Simplex<3>, Nodes,
 
   OptimizeOptions o = options;
   o.ideal = IdealKind::straight_sided;
-  const Eigen::Matrix2Xd uv_start = uv;
-  BoundaryFaceResult r{optimize_surface<Measure, Q>(face, surface, uv, o, measure), std::nullopt};
+  const Eigen::Matrix2Xd uv_start = o.certify ? uv : Eigen::Matrix2Xd();  // the repair's fallback
+  const auto ideals = element_ideals ? std::move(facet_ideals) : surface_ideals(face, o.ideal);
+  BoundaryFaceResult r{optimize_surface<Measure, Q>(face, surface, uv, ideals, o, measure), std::nullopt};
   if (o.certify)
-    r.certification = certify_and_repair_surface<Measure, Q>(
-        face, surface, uv, surface_ideals(face, o.ideal), o.solver_options(), o.certify_repair_options(), o.threads,
-        o.regularization_alpha, measure, &uv_start);
+    r.certification = certify_and_repair_surface<Measure, Q>(face, surface, uv, ideals, o.solver_options(),
+                                                             o.certify_repair_options(), o.threads,
+                                                             o.regularization_alpha, measure, &uv_start);
   for (int k = 0; k < n; ++k) {
     if (!free[k]) continue;
     mesh.node(global[k]) = face.node(k);
