@@ -27,17 +27,20 @@
 ///               still tangled the pipeline stops there (the degree-p
 ///               stages cannot end valid) and the claim fails. SD7003's
 ///               trailing edge is a 4-degree wedge: the layer nodes of its
-///               stack on the wall border (held at the planes z = 0 and
-///               z = span) sit along the bisector, only ~0.04 H_k above
-///               either surface, and the thin levels there stay inverted
-///               (10 elements, levels 0-3, in the spanwise rows next to the
-///               box faces, x = 0.977-0.991; 2026-12-03).
+///               stack on the wall border (on the planes z = 0 and
+///               z = span) go to their full heights along the bisector,
+///               which folds one layer triangle per level in each plane;
+///               the pipeline's stage (c) therefore first slides the
+///               border nodes on their planes against the stretched
+///               ideal's faces (before it, 10 elements, levels 0-3 at
+///               x = 0.977-0.991, stayed inverted; now 0 after 22
+///               iterations at p = 2; 2026-12-03).
 ///               The quick NACA 0012 wing gets through every stage (its
 ///               leading edge's stacks at the border are isoparametric,
 ///               boundary_layer.hpp) and ends valid: the optimizer leaves
-///               56 layer elements near the box faces valid at every
-///               quadrature point but folded at a free layer vertex, and
-///               the certify-and-repair stage mends them in one round;
+///               8 layer elements near the box faces valid at every
+///               quadrature point but folded at a node, and the
+///               certify-and-repair stage mends them in one round;
 ///   stretching  first-layer heights giving aspect ratios about 1:10^2,
 ///               1:10^4, 1:10^6 and 1:10^8 on a 2D quarter annulus (inner
 ///               circle of diameter 1 as the wall, Circle<2>), p = 2 and 4:
@@ -59,8 +62,9 @@
 /// -1 optimizes to convergence as the thesis). Stage (e) ends with the
 /// certify-and-repair stage (optimize/certified.hpp; --no-certify leaves it
 /// out): the quick wing's thin layer elements at the box faces are valid at
-/// every quadrature point after the optimizer but fold at a free layer
-/// vertex (56 elements certified invalid), which one repair round mends.
+/// every quadrature point after the optimizer but fold at a node (8
+/// elements certified invalid; 56 before stage (c) slid the border nodes),
+/// which one repair round mends.
 ///
 /// Output: the tables on stdout; CSV (--csv, default OUT/boundary_layer.csv)
 /// and the JSON report (--json, default OUT/boundary_layer.json; one case per
@@ -264,6 +268,9 @@ struct Settings {
   int iterations_after_valid = 3;
   int max_iterations = 200;
   bool certify = true;
+  hom::SolverKind solver = hom::SolverKind::newton;  ///< both optimizer stages
+  bool p_continuation = false;                       ///< stage (e) (appendix C)
+  hom::RegularizationScope scope = hom::RegularizationScope::invalid_elements;  ///< both stages
   bool verbose = false;
   bool plot = true;
   fs::path plot_script = HOM_PLOT_SCRIPT;
@@ -297,7 +304,10 @@ class Runner {
       opt->threads = s_.threads;
       opt->max_iterations = s_.max_iterations;
       opt->verbose = s_.verbose;
+      opt->solver = s_.solver;
+      opt->regularization_scope = s_.scope;
     }
+    o.high_order_optimize.p_continuation = s_.p_continuation;
     o.high_order_optimize.iterations_after_valid = s_.iterations_after_valid;
     o.high_order_optimize.certify = s_.certify;
     if (s_.verbose) o.progress = [](const std::string& st) { std::fprintf(stderr, "  stage %s done\n", st.c_str()); };
@@ -714,7 +724,7 @@ void run_stretching(Runner& run, const std::vector<int>& degrees) {
 int main(int argc, char** argv) {
   Settings s;
   std::vector<std::string> names;
-  std::string csv, json, airfoil, sphere_wall;
+  std::string csv, json, airfoil, sphere_wall, solver, scope;
   int p = 4;
   po::options_description desc(
       "bench_boundary_layer [options]: section 6.3.3's curved boundary layers (tables 6.4, 6.5) and the\n"
@@ -735,6 +745,12 @@ int main(int argc, char** argv) {
       ("iterations-after-valid", po::value(&s.iterations_after_valid)->default_value(3),
        "high-order stage: stop once valid this many iterations (-1: optimize to convergence)")  //
       ("max-iterations", po::value(&s.max_iterations)->default_value(200), "per optimizer stage")  //
+      ("solver", po::value(&solver)->default_value("newton"),
+       "solver of stages (c) and (e): newton, matrix-free or gauss-seidel")  //
+      ("p-continuation", po::bool_switch(&s.p_continuation),
+       "stage (e): untangle the linear sub-mesh first (appendix C)")  //
+      ("regularization-scope", po::value(&scope)->default_value("invalid"),
+       "elements regularized while the mesh is invalid (stages c and e): invalid or whole-mesh")  //
       ("no-certify", 
        "no certify-and-repair stage after stage (e) (Bernstein bounds; on by default)")  //
       ("verbose,v", po::bool_switch(&s.verbose), "optimizer progress on stderr")  //
@@ -751,6 +767,8 @@ int main(int argc, char** argv) {
     s.out = vm["out"].as<std::string>();
     s.plot = !vm.count("no-plot");
     s.certify = !vm.count("no-certify");
+    s.solver = hom::parse_solver_kind(solver);
+    s.scope = hom::parse_regularization_scope(scope);
     s.plot_script = vm["plot-script"].as<std::string>();
     if (s.quick && vm["p"].defaulted()) p = 2;
     if (s.quick && vm["airfoil"].defaulted()) airfoil = "naca0012";
