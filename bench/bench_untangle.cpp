@@ -32,6 +32,12 @@
 /// and VTU files (point data: point-wise quality, the minimum over the
 /// elements sharing a node; cell data: element quality, scaled Jacobian) in
 /// --out; the JSON report of DESIGN.md in --json (default OUT/untangle.json).
+/// Figure 4.7: for each degree, the cut of the initial, optimized (and Gmsh's)
+/// curved mesh by the plane z through the cavity's centre
+/// (untangle_pP_<stage>_cut.csv, bench/mesh_cut.hpp: the elements' degree-p
+/// maps, not their vertices), drawn side by side as untangle_pP_cut.png by
+/// bench/plot_cut.py (skipped with a message without /usr/bin/python3 and
+/// matplotlib; --no-cut writes neither).
 /// Exit status: 0 when every optimized mesh is valid, 1 if one keeps inverted
 /// elements, 2 on bad options or errors.
 
@@ -57,6 +63,8 @@
 #include "cube_with_cavity.hpp"
 #include "gmsh_peer.hpp"
 #include "harness.hpp"
+#include "mesh_cut.hpp"
+#include "plot_script.hpp"
 #include "hom/geometry/curve_boundary.hpp"
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
@@ -74,6 +82,9 @@
 
 #ifndef HOM_VERSION
 #define HOM_VERSION "unknown"
+#endif
+#ifndef HOM_PLOT_SCRIPT
+#define HOM_PLOT_SCRIPT "bench/plot_cut.py"
 #endif
 
 namespace fs = std::filesystem;
@@ -181,6 +192,14 @@ void write_vtu(const fs::path& path, const TetMesh& mesh, const hom::MeshQuality
                      {{"quality", 1, mq.qualities()}, {"scaled_jacobian", 1, mq.scaled_jacobians()}});
 }
 
+/// The cut of `mesh` by the plane z through the middle of its bounding box
+/// (the cavity's centre), 2p sub-intervals per edge (bench/mesh_cut.hpp).
+void write_cut(const fs::path& path, const TetMesh& mesh, const hom::MeshQuality& mq) {
+  const Eigen::Vector3d centre = 0.5 * (mesh.nodes().rowwise().minCoeff() + mesh.nodes().rowwise().maxCoeff());
+  const auto polygons = hom::bench::cut_mesh(mesh, hom::bench::CutPlane::normal_z(centre), std::max(2, 2 * mesh.degree()));
+  hom::bench::write_cut_csv(path.string(), polygons, mq, std::vector<std::optional<int>>(mesh.num_elements()));
+}
+
 
 void print_row(const std::string& label, const hom::Statistics& s, const Row* thesis) {
   std::printf("  %-10s %6s %6s %6s %9s %6d", label.c_str(), fmt(s.min).c_str(), fmt(s.max).c_str(),
@@ -204,6 +223,7 @@ struct Options {
   std::optional<fs::path> json;
   bool quick = false;
   bool vtu = true;
+  bool cut = true;  ///< figure 4.7's cuts (file comment)
   bool verbose = false;
   bool optimize = true;
   int max_iterations = 200;
@@ -214,6 +234,15 @@ struct Options {
   double peer_timeout = 600;   ///< --peer-timeout, seconds
   int peer_mode = 1;           ///< --peer-mode: Mesh.HighOrderOptimize
 };
+
+/// OUT/untangle_pP_<stage>.vtu and OUT/untangle_pP_<stage>_cut.csv, as
+/// --no-vtu and --no-cut allow.
+void write_stage_files(const Options& o, int p, const std::string& stage, const TetMesh& mesh,
+                       const hom::MeshQuality& mq) {
+  const std::string name = "untangle_p" + std::to_string(p) + "_" + stage;
+  if (o.vtu) write_vtu(o.out / (name + ".vtu"), mesh, mq, o.quadrature);
+  if (o.cut) write_cut(o.out / (name + "_cut.csv"), mesh, mq);
+}
 
 // ---------------------------------------------------------------------------
 // Peer: Gmsh's high-order optimizer on the same perturbed input, in a child
@@ -240,7 +269,7 @@ PeerRow run_peer(const TetMesh& perturbed, int p, const Options& o) {
     const auto q = evaluate(row.run.mesh, o.quadrature);
     row.stage = make_stage("gmsh", q);
     row.stage.time_s = row.run.time_s;
-    if (o.vtu) write_vtu(o.out / ("untangle_p" + std::to_string(p) + "_gmsh.vtu"), row.run.mesh, q, o.quadrature);
+    write_stage_files(o, p, "gmsh", row.run.mesh, q);
   }
   row.run.mesh = TetMesh();
   return row;
@@ -338,7 +367,7 @@ CaseResult run_case(const TetMesh& linear, const hom::GeometryModel<3>& geometry
               p, r.elements, r.nodes, moved, r.perturbation, static_cast<unsigned long long>(o.seed),
               curving.curve_nodes + curving.surface_nodes, curving.max_displacement, setup_s);
   std::fflush(stdout);
-  if (o.vtu) write_vtu(o.out / ("untangle_p" + std::to_string(p) + "_initial.vtu"), mesh, initial, o.quadrature);
+  write_stage_files(o, p, "initial", mesh, initial);
 
   if (!o.optimize) return r;
   std::optional<TetMesh> peer_input;  // the perturbed mesh, for the peer (hom optimizes `mesh` in place)
@@ -378,7 +407,7 @@ CaseResult run_case(const TetMesh& linear, const hom::GeometryModel<3>& geometry
   r.stages.push_back(s);
   r.optimized = true;
   r.valid_at_end = final_quality.inverted() == 0;
-  if (o.vtu) write_vtu(o.out / ("untangle_p" + std::to_string(p) + "_optimized.vtu"), mesh, final_quality, o.quadrature);
+  write_stage_files(o, p, "optimized", mesh, final_quality);
 #else
   std::printf("p = %d: the optimizer (hom/optimize/optimize.hpp) is not available in this build; "
               "stopping after the initial statistics.\n",
@@ -466,6 +495,7 @@ int main(int argc, char** argv) {
       ("json", po::value(&json), "JSON report (default OUT/untangle.json)")
       ("quick", po::bool_switch(&o.quick), "coarser linear mesh (CI); default degrees 2,5")
       ("no-vtu", "do not write VTU files")
+      ("no-cut", "do not write the cuts of figure 4.7 (CSV, PNG)")
       ("no-optimize", "stop after the statistics of the perturbed mesh (for calibrating --perturb)")
       ("max-iterations", po::value(&o.max_iterations)->default_value(200), "optimizer iteration limit per stage")
       ("verbose,v", "optimizer progress, one line per iteration")
@@ -507,6 +537,7 @@ int main(int argc, char** argv) {
       throw std::invalid_argument("--solver: expected newton, matrix-free, gauss-seidel or auto, got '" + o.solver + "'");
     if (!json.empty()) o.json = json;
     o.vtu = !vm.count("no-vtu");
+    o.cut = !vm.count("no-cut");
     o.verbose = vm.count("verbose") > 0;
     o.optimize = !vm.count("no-optimize");
     (void)hom::parse_regularization_scope(o.scope);  // throws on an unknown name
@@ -538,6 +569,12 @@ int main(int argc, char** argv) {
     for (int p : o.degrees) {
       results.push_back(run_case(model.mesh, model.geometry, p, o));
       print_case(results.back());
+      if (o.cut)
+        hom::bench::run_plot_script(HOM_PLOT_SCRIPT, o.out,
+                                    {"untangle_p" + std::to_string(p),
+                                     "figure 4.7 analogue: cube with a spherical cavity, p = " + std::to_string(p) +
+                                         ", cut z through the cavity's centre"},
+                                    "matplotlib, numpy");
     }
 
     // CSV, one row per degree and stage.

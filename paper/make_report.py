@@ -59,13 +59,13 @@ QUICK = [
     dict(name="untangle_p5", binary="bench_untangle", args=["--p", "5", "--pcont", "--no-vtu"],
          conditions="the full linear mesh (1436 tetrahedra against the thesis's 1441) at p = 5, matrix-free Newton with "
                     "p-continuation, no peer"),
-    dict(name="untangle_newton", binary="bench_untangle", args=["--quick", "--p", "2", "--solver", "newton", "--no-vtu"],
+    dict(name="untangle_newton", binary="bench_untangle", args=["--quick", "--p", "2", "--solver", "newton", "--no-vtu", "--no-cut"],
          role="solver"),
-    dict(name="untangle_gs", binary="bench_untangle", args=["--quick", "--p", "2", "--solver", "gauss-seidel", "--no-vtu"],
+    dict(name="untangle_gs", binary="bench_untangle", args=["--quick", "--p", "2", "--solver", "gauss-seidel", "--no-vtu", "--no-cut"],
          role="solver"),
-    dict(name="untangle_pcont", binary="bench_untangle", args=["--quick", "--p", "2", "--pcont", "--no-vtu"],
+    dict(name="untangle_pcont", binary="bench_untangle", args=["--quick", "--p", "2", "--pcont", "--no-vtu", "--no-cut"],
          role="solver"),
-    dict(name="untangle_1thread", binary="bench_untangle", args=["--quick", "--p", "2", "--threads", "1", "--no-vtu"],
+    dict(name="untangle_1thread", binary="bench_untangle", args=["--quick", "--p", "2", "--threads", "1", "--no-vtu", "--no-cut"],
          role="solver"),
     dict(name="smooth", binary="bench_smooth", args=["--case", "4.4", "--p44", "2", "--max-iterations-44", "5"],
          conditions="tables 4.4, 4.5 at p = 2 (thesis: 5) with at most 5 iterations per ideal; table 4.2 "
@@ -106,20 +106,20 @@ FULL = [
     dict(name="untangle", binary="bench_untangle", args=["--p", "2,5,10", "--peer", "gmsh", "--peer-timeout", "1800"],
          timeout=6 * 3600),
     dict(name="untangle_unperturbed_peer", binary="bench_untangle",
-         args=["--p", "2,5", "--perturb", "0", "--peer", "gmsh", "--peer-timeout", "1800", "--no-vtu"],
+         args=["--p", "2,5", "--perturb", "0", "--peer", "gmsh", "--peer-timeout", "1800", "--no-vtu", "--no-cut"],
          role="peer", conditions="the curved mesh without the random perturbation, through hom and Gmsh"),
     dict(name="untangle_peer_mode2", binary="bench_untangle",
-         args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "2", "--peer-timeout", "1800", "--no-vtu"], role="peer"),
+         args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "2", "--peer-timeout", "1800", "--no-vtu", "--no-cut"], role="peer"),
     dict(name="untangle_peer_mode3", binary="bench_untangle",
-         args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "3", "--peer-timeout", "1800", "--no-vtu"], role="peer"),
+         args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "3", "--peer-timeout", "1800", "--no-vtu", "--no-cut"], role="peer"),
     dict(name="untangle_peer_mode4", binary="bench_untangle",
-         args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "4", "--peer-timeout", "1800", "--no-vtu"], role="peer"),
-    dict(name="untangle_newton", binary="bench_untangle", args=["--p", "5", "--solver", "newton", "--no-vtu"],
+         args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "4", "--peer-timeout", "1800", "--no-vtu", "--no-cut"], role="peer"),
+    dict(name="untangle_newton", binary="bench_untangle", args=["--p", "5", "--solver", "newton", "--no-vtu", "--no-cut"],
          role="solver"),
-    dict(name="untangle_gs", binary="bench_untangle", args=["--p", "5", "--solver", "gauss-seidel", "--no-vtu"],
+    dict(name="untangle_gs", binary="bench_untangle", args=["--p", "5", "--solver", "gauss-seidel", "--no-vtu", "--no-cut"],
          role="solver"),
-    dict(name="untangle_pcont", binary="bench_untangle", args=["--p", "5", "--pcont", "--no-vtu"], role="solver"),
-    dict(name="untangle_1thread", binary="bench_untangle", args=["--p", "5", "--threads", "1", "--no-vtu"],
+    dict(name="untangle_pcont", binary="bench_untangle", args=["--p", "5", "--pcont", "--no-vtu", "--no-cut"], role="solver"),
+    dict(name="untangle_1thread", binary="bench_untangle", args=["--p", "5", "--threads", "1", "--no-vtu", "--no-cut"],
          role="solver"),
     dict(name="smooth", binary="bench_smooth", args=[], timeout=4 * 3600),
     dict(name="certify", binary="bench_certify", args=["--p", "2,5,10"], timeout=4 * 3600),
@@ -744,6 +744,18 @@ FIGURES = [
     ("surface_appendixF", "appendixF_paraboloid_triangle.png", "Figure F.3: hyperbolic paraboloid, triangle"),
     ("surface_appendixF", "appendixF_paraboloid_quadrilateral.png", "Figure F.4: hyperbolic paraboloid, quadrilateral"),
     ("surface", "table52.png", "Figure 5.8: meshes of table 5.2"),
+    ("untangle", "untangle_p2_cut.png",
+     "Figure 4.7 (a, d) analogue: cube with a spherical cavity at p = 2, initial and untangled (and Gmsh's result), "
+     "cut through the cavity's centre"),
+    ("untangle_p5", "untangle_p5_cut.png",
+     "Figure 4.7 (b, e) analogue: cube with a spherical cavity at p = 5, initial and untangled, cut through the "
+     "cavity's centre"),
+    ("untangle", "untangle_p5_cut.png",
+     "Figure 4.7 (b, e) analogue: cube with a spherical cavity at p = 5, initial and untangled (and Gmsh's result), "
+     "cut through the cavity's centre"),
+    ("untangle", "untangle_p10_cut.png",
+     "Figure 4.7 (c, f) analogue: cube with a spherical cavity at p = 10, initial and untangled (and Gmsh's result), "
+     "cut through the cavity's centre"),
     ("boundary_layer", "cut_sphere.png",
      "Figure 6.9 analogue: cut through the curved boundary layer around the sphere (table 6.4), whole and at the wall"),
     ("boundary_layer", "cut_wing.png",
@@ -1117,8 +1129,10 @@ def write_report(args, meta, runs, reports, out_dir, work, total_s):
     hists = histograms(work, out_dir, runs)
     lines += ["## Figures", "",
               "PNG figures drawn by the harnesses (copied beside this report) and element-quality histograms drawn "
-              "from their VTU files. Pictures of the 3D curved meshes (slices colored by quality) are not drawn yet: "
-              "the VTU files in the work directory open in ParaView.", ""]
+              "from their VTU files. The 3D curved meshes are shown by planar cuts (bench/mesh_cut.hpp): each element's "
+              "degree-p map is cut, not its vertices, so curved elements show curved; polygons are coloured by "
+              "element quality and inverted elements hatched in red. The VTU files in the work directory open in "
+              "ParaView.", ""]
     if figs or hists:
         for caption, rel in figs + hists:
             lines += ["**%s**" % caption, "", "![%s](%s)" % (caption, rel), ""]
