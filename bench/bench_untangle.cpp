@@ -196,7 +196,8 @@ void write_vtu(const fs::path& path, const TetMesh& mesh, const hom::MeshQuality
 /// (the cavity's centre), 2p sub-intervals per edge (bench/mesh_cut.hpp).
 void write_cut(const fs::path& path, const TetMesh& mesh, const hom::MeshQuality& mq) {
   const Eigen::Vector3d centre = 0.5 * (mesh.nodes().rowwise().minCoeff() + mesh.nodes().rowwise().maxCoeff());
-  const auto polygons = hom::bench::cut_mesh(mesh, hom::bench::CutPlane::normal_z(centre), std::max(2, 2 * mesh.degree()));
+  const auto plane = hom::bench::CutPlane::normal_z(centre);
+  const auto polygons = hom::bench::cut_mesh(mesh, plane, std::max(2, 2 * mesh.degree()));
   hom::bench::write_cut_csv(path.string(), polygons, mq, std::vector<std::optional<int>>(mesh.num_elements()));
 }
 
