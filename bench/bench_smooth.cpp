@@ -108,7 +108,12 @@
 /// Output: the tables beside the thesis's numbers on stdout; smooth.csv, VTU
 /// files (point data: point-wise quality, the minimum over the elements
 /// sharing a node; cell data: quality, scaled Jacobian, r_v where defined) and
-/// the JSON report of DESIGN.md (default OUT/smooth.json) in --out.
+/// the JSON report of DESIGN.md (default OUT/smooth.json) in --out; the
+/// figures' cuts by the plane z through the cube's centre (bench/mesh_cut.hpp:
+/// the elements' degree-p maps are cut), smooth_<table>_<stage>_cut.csv,
+/// drawn side by side by bench/plot_cut.py as smooth_4.2_cut.png (figure 4.8:
+/// initial, non-linear, linear) and smooth_4.4_cut.png (figure 4.10: initial,
+/// equilateral, straight-sided); --no-cut writes neither.
 /// Exit status: 0 when the thesis's claims hold (table 4.2: the non-linear
 /// result is valid and the linear formulation from the tangled mesh is not;
 /// table 4.4: the straight-sided ideal gives more elements with mu = 1 and a
@@ -131,7 +136,10 @@
 
 #include "cube_with_cavity.hpp"
 #include "harness.hpp"
+#include "mesh_cut.hpp"
+#include "plot_script.hpp"
 #include "hom/geometry/curve_boundary.hpp"
+#include "hom/io/certification_report.hpp"
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
 #include "hom/measure/shape_measure.hpp"
@@ -144,6 +152,9 @@
 
 #ifndef HOM_VERSION
 #define HOM_VERSION "unknown"
+#endif
+#ifndef HOM_PLOT_SCRIPT
+#define HOM_PLOT_SCRIPT "bench/plot_cut.py"
 #endif
 
 namespace fs = std::filesystem;
@@ -229,6 +240,7 @@ struct Options {
   fs::path out = "results/smooth";
   std::optional<fs::path> json;
   bool vtu = true;
+  bool cut = true;  ///< the figures' cuts (file comment)
   bool verbose = false;
 };
 
@@ -301,6 +313,17 @@ void write_vtu(const Options& o, const std::string& file, const TetMesh& mesh, c
   std::vector<hom::io::VtuField> cells{{"quality", 1, mq.qualities()}, {"scaled_jacobian", 1, mq.scaled_jacobians()}};
   if (rv) cells.push_back({"relative_volume_error", 1, *rv});
   hom::io::write_vtu((o.out / file).string(), mesh, {{"quality", 1, nodal}}, cells);
+}
+
+/// OUT/smooth_<table>_<stage>_cut.csv (file comment), unless --no-cut.
+void write_cut(const Options& o, const std::string& table, const std::string& stage, const TetMesh& mesh,
+               const hom::MeshQuality& mq) {
+  if (o.cut) hom::bench::write_mid_z_cut_csv((o.out / ("smooth_" + table + "_" + stage + "_cut.csv")).string(), mesh, mq);
+}
+
+/// Draws OUT/smooth_<table>_cut.png from the table's cuts (bench/plot_cut.py).
+void plot_cuts(const Options& o, const std::string& table, const std::string& title) {
+  if (o.cut) hom::bench::run_plot_script(HOM_PLOT_SCRIPT, o.out, {"smooth_" + table, title}, "matplotlib, numpy");
 }
 
 /// hom::optimize with the harness's solver settings; fills the stage's method,
@@ -409,6 +432,7 @@ std::vector<Stage> run_table_42(const Options& o) {
               moved, tangled.inverted(), seconds_since(t0));
   std::fflush(stdout);
   write_vtu(o, "smooth_4.2_initial.vtu", mesh, tangled, straight);
+  write_cut(o, "4.2", "initial", mesh, tangled);
 
   // (a) the non-linear method.
   TetMesh nonlinear = mesh;
@@ -418,6 +442,7 @@ std::vector<Stage> run_table_42(const Options& o) {
   record_optimizer(stages.back(), rn);
   stages.back().thesis = thesis_42_nonlinear;
   write_vtu(o, "smooth_4.2_nonlinear.vtu", nonlinear, qn, straight);
+  write_cut(o, "4.2", "nonlinear", nonlinear, qn);
   std::printf("  non-linear: %.1f s, %d iterations (%s)\n", rn.time_s, stages.back().iterations,
               stages.back().stop_reason.c_str());
   std::fflush(stdout);
@@ -452,6 +477,10 @@ std::vector<Stage> run_table_42(const Options& o) {
                                "smooth_4.2_linear_direct_from_initial.vtu", thesis_42_linear_from_tangled);
   const auto direct_b = linear(nonlinear, hom::LinearSolveKind::direct, "linear, direct, from non-linear",
                                "smooth_4.2_linear_direct_from_nonlinear.vtu", thesis_42_linear_from_nonlinear);
+  write_cut(o, "4.2", "linear", direct_a, evaluate(direct_a, straight));
+  plot_cuts(o, "4.2", "figure 4.8 analogue: p = " + std::to_string(p) + ", cavity moved by " + fmt(o.shift, 2) +
+                          "; initial, non-linear (eq 4.10), linear formulation (eq 4.15, direct); cut z through the "
+                          "cube's centre");
   std::printf("  the two direct solves differ by %.1e (max node distance): the minimizer does not depend on the start\n",
               (direct_a.nodes() - direct_b.nodes()).cwiseAbs().maxCoeff());
   linear(mesh, hom::LinearSolveKind::gauss_seidel, "linear, GS, from initial", "smooth_4.2_linear_gs_from_initial.vtu",
@@ -484,6 +513,7 @@ std::vector<Stage> run_table_44(const Options& o) {
               seconds_since(t0));
   std::fflush(stdout);
   write_vtu(o, "smooth_4.4_initial.vtu", mesh, initial, straight);
+  write_cut(o, "4.4", "initial", mesh, initial);
 
   for (const auto ideal : {regular, straight}) {
     TetMesh m = mesh;
@@ -503,10 +533,14 @@ std::vector<Stage> run_table_44(const Options& o) {
     s.thesis_mu_one = eq ? thesis_mu_one_equilateral : thesis_mu_one_straight;
     stages.push_back(s);
     write_vtu(o, "smooth_4.4_" + s.ideal + ".vtu", m, q, ideal, &rv);
+    write_cut(o, "4.4", s.ideal, m, q);
     std::printf("  optimized against the %s ideal: %.1f s, %d iterations (%s)\n", s.ideal.c_str(), r.time_s,
                 s.iterations, s.stop_reason.c_str());
     std::fflush(stdout);
   }
+  plot_cuts(o, "4.4", "figure 4.10 analogue: graded cube, p = " + std::to_string(p) +
+                         "; initial, smoothed against the equilateral and the straight-sided ideal (each stage's "
+                         "quality against its ideal); cut z through the centre");
   return stages;
 }
 
@@ -642,12 +676,7 @@ void write_outputs(const Options& o, const std::vector<Stage>& stages, const std
         .set("mu_one", s.mu_one >= 0 ? Json(s.mu_one) : Json())
         .set("quadrature", std::string(hom::DefaultExactness::name))
         .set("threads", threads);
-    if (s.certification)
-      c.set("certified_valid", s.certification->valid)
-          .set("certified_invalid", s.certification->invalid)
-          .set("undecided", s.certification->undecided)
-          .set("certified_min_scaled_jacobian", opt_num(s.certification->min_scaled_jacobian))
-          .set("certify_rounds", s.certification->rounds);
+    if (s.certification) hom::io::add_certification(c, *s.certification, hom::OptimizeOptions{}.certify_depth);
     Json t = Json();
     if (s.thesis) {
       t = hom::bench::thesis_row_json(*s.thesis);
@@ -708,6 +737,7 @@ int main(int argc, char** argv) {
       ("out", po::value(&o.out)->default_value("results/smooth"), "output directory (CSV, VTU, JSON)")
       ("json", po::value(&json), "JSON report (default OUT/smooth.json)")
       ("no-vtu", "do not write VTU files")
+      ("no-cut", "do not write the cuts of figures 4.8 and 4.10 (CSV, PNG)")
       ("no-certify", "non-linear rows: check det D phi at the quadrature points only (the thesis), without the final "
        "certification (Bernstein bounds) and repair of folds between them")
       ("verbose,v", "optimizer progress, one line per iteration");
@@ -748,6 +778,7 @@ int main(int argc, char** argv) {
       throw std::invalid_argument("--scope: expected whole-mesh or invalid, got '" + scope + "'");
     if (!json.empty()) o.json = json;
     o.vtu = !vm.count("no-vtu");
+    o.cut = !vm.count("no-cut");
     o.certify = !vm.count("no-certify");
     o.verbose = vm.count("verbose") > 0;
   } catch (const std::exception& e) {

@@ -192,14 +192,6 @@ void write_vtu(const fs::path& path, const TetMesh& mesh, const hom::MeshQuality
                      {{"quality", 1, mq.qualities()}, {"scaled_jacobian", 1, mq.scaled_jacobians()}});
 }
 
-/// The cut of `mesh` by the plane z through the middle of its bounding box
-/// (the cavity's centre), 2p sub-intervals per edge (bench/mesh_cut.hpp).
-void write_cut(const fs::path& path, const TetMesh& mesh, const hom::MeshQuality& mq) {
-  const Eigen::Vector3d centre = 0.5 * (mesh.nodes().rowwise().minCoeff() + mesh.nodes().rowwise().maxCoeff());
-  const auto plane = hom::bench::CutPlane::normal_z(centre);
-  const auto polygons = hom::bench::cut_mesh(mesh, plane, std::max(2, 2 * mesh.degree()));
-  hom::bench::write_cut_csv(path.string(), polygons, mq, std::vector<std::optional<int>>(mesh.num_elements()));
-}
 
 
 void print_row(const std::string& label, const hom::Statistics& s, const Row* thesis) {
@@ -242,7 +234,7 @@ void write_stage_files(const Options& o, int p, const std::string& stage, const 
                        const hom::MeshQuality& mq) {
   const std::string name = "untangle_p" + std::to_string(p) + "_" + stage;
   if (o.vtu) write_vtu(o.out / (name + ".vtu"), mesh, mq, o.quadrature);
-  if (o.cut) write_cut(o.out / (name + "_cut.csv"), mesh, mq);
+  if (o.cut) hom::bench::write_mid_z_cut_csv((o.out / (name + "_cut.csv")).string(), mesh, mq);
 }
 
 // ---------------------------------------------------------------------------

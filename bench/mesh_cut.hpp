@@ -13,7 +13,7 @@
 /// phi_e's piecewise-linear interpolant on the lattice, O((h / n)^2) off.
 ///
 /// write_cut_csv writes one row per polygon vertex, read by
-/// bench/plot_boundary_layer.py.
+/// bench/plot_cut.py (and plot_boundary_layer.py, which uses it).
 
 #include <algorithm>
 #include <array>
@@ -163,6 +163,16 @@ inline void write_cut_csv(const std::string& path, const std::vector<CutPolygon>
   }
   const std::string text = s.str();
   io::write_atomically(path, [&](std::FILE* f) { io::write_all(f, path, text.data(), text.size()); });
+}
+
+/// The cut of `mesh` by the plane z through the middle of its bounding box
+/// (the cavity's centre of the cube meshes of tables 4.1, 4.2), 2p
+/// sub-intervals per edge, written by write_cut_csv with no layer levels.
+template <class Nodes>
+void write_mid_z_cut_csv(const std::string& path, const Mesh<Simplex<3>, Nodes>& mesh, const MeshQuality& quality) {
+  const Eigen::Vector3d centre = 0.5 * (mesh.nodes().rowwise().minCoeff() + mesh.nodes().rowwise().maxCoeff());
+  const auto polygons = cut_mesh(mesh, CutPlane::normal_z(centre), std::max(2, 2 * mesh.degree()));
+  write_cut_csv(path, polygons, quality, std::vector<std::optional<int>>(mesh.num_elements()));
 }
 
 }  // namespace hom::bench

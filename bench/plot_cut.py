@@ -4,8 +4,8 @@ bench/mesh_cut.hpp writes (write_cut_csv): the shared reader and panel of
 plot_boundary_layer.py, and a figure of one case's stages side by side.
 
 Usage: plot_cut.py DIR NAME [TITLE]
-  reads DIR/NAME_<stage>_cut.csv for the stages initial, smoothed, optimized,
-  gmsh (those present, in that order, then any other) and writes
+  reads DIR/NAME_<stage>_cut.csv for the stages of STAGE_ORDER (those
+  present, in that order, then any other) and writes
   DIR/NAME_cut.png, one panel per stage.
 
 The cut is the union of small polygons, the sections of the linear
@@ -31,7 +31,7 @@ from matplotlib import colors as mcolors  # noqa: E402
 
 CMAP = plt.get_cmap("viridis")
 NORM = mcolors.Normalize(vmin=0.0, vmax=1.0)
-STAGE_ORDER = ["initial", "smoothed", "optimized", "gmsh"]
+STAGE_ORDER = ["initial", "smoothed", "nonlinear", "linear", "optimized", "equilateral", "straight-sided", "gmsh"]
 
 
 class Cut:

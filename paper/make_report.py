@@ -756,6 +756,12 @@ FIGURES = [
     ("untangle", "untangle_p10_cut.png",
      "Figure 4.7 (c, f) analogue: cube with a spherical cavity at p = 10, initial and untangled (and Gmsh's result), "
      "cut through the cavity's centre"),
+    ("smooth", "smooth_4.2_cut.png",
+     "Figure 4.8 analogue: the cavity moved (table 4.2, p = 5): initial, non-linear method, linear formulation, "
+     "cut through the cube's centre"),
+    ("smooth", "smooth_4.4_cut.png",
+     "Figure 4.10 analogue: graded cube (tables 4.4, 4.5): initial, smoothed against the equilateral and against "
+     "the straight-sided ideal, cut through the centre"),
     ("boundary_layer", "cut_sphere.png",
      "Figure 6.9 analogue: cut through the curved boundary layer around the sphere (table 6.4), whole and at the wall"),
     ("boundary_layer", "cut_wing.png",

@@ -42,10 +42,6 @@ std::string point_text(const Eigen::Vector3d& x) {
   return s.str();
 }
 
-/// Free coordinates up to which the "auto" solver is the assembled Newton
-/// method (as `hom optimize --solver auto`).
-constexpr long auto_newton_max_dofs = 20000;
-
 /// Where the nodes of a degree-p patch (a boundary face of a tetrahedron, or
 /// an element of a surface or planar mesh) of family PF sit: for each local
 /// edge its interior nodes from the edge's first vertex to its second with
@@ -880,8 +876,7 @@ class Pipeline {
     const long dofs = long(free_nodes) * D;
     OptimizeOptions opt;
     opt.ideal = IdealKind::straight_sided;
-    opt.solver = o_.solver == "auto" ? (dofs <= auto_newton_max_dofs ? SolverKind::newton : SolverKind::matrix_free_newton)
-                                     : parse_solver_kind(o_.solver);
+    opt.solver = o_.solver == "auto" ? auto_solver_kind(dofs) : parse_solver_kind(o_.solver);
     opt.p_continuation = o_.pcont == CurveOptions::Continuation::on ||
                          (o_.pcont == CurveOptions::Continuation::automatic && initial_inverted > 0);
     opt.threads = o_.threads;

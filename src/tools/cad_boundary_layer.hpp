@@ -22,7 +22,7 @@
 #include "boundary_layer_report.hpp"
 #include "cad_command.hpp"
 #include "cad_model.hpp"
-#include "certification_report.hpp"
+#include "hom/io/certification_report.hpp"
 #include "hom/optimize/boundary_layer_pipeline.hpp"
 #include "hom/optimize/certified.hpp"
 #include "mesh_io.hpp"
@@ -146,7 +146,7 @@ inline int boundary_layer_and_write(const cad::CadModel& cad, const Mesh<Simplex
   const double allowed = 1e-6 * cad.size();
   std::printf("wall on the CAD: largest distance of a wall node to its face %.3g\n", distance);
   const std::optional<CertificationOutcome>& certification = r.certification;
-  if (certification) print_certification(*certification, o.curve.certify_depth);
+  if (certification) io::print_certification(*certification, o.curve.certify_depth);
   const bool on_cad = distance <= allowed;
   const bool valid = r.valid && on_cad && (!certification || certification->certified());
   const char* cmd = o.command.c_str();
@@ -172,7 +172,7 @@ inline int boundary_layer_and_write(const cad::CadModel& cad, const Mesh<Simplex
       .set("valid", valid)
       .set("max_cad_distance", distance)
       .set("output", valid ? io::Json(o.out) : io::Json());
-  if (certification) add_certification(cases.back(), *certification, o.curve.certify_depth);
+  if (certification) io::add_certification(cases.back(), *certification, o.curve.certify_depth);
   if (valid) {
     io::write_msh(o.out, r.mesh, {});
     std::printf("wrote %s\n", o.out.c_str());

@@ -17,8 +17,8 @@
 
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
-#include "certification_report.hpp"
 #include "curve_mesh.hpp"
+#include "hom/io/certification_report.hpp"
 #include "hom/io/report.hpp"
 #include "mesh_io.hpp"
 
@@ -167,7 +167,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   const double rss = peak_rss_mb();
   std::printf("boundary on the CAD: %d nodes checked, largest distance %.3g\n", r.conformity.checked,
               r.conformity.max_distance);
-  if (r.certification) print_certification(*r.certification, co.certify_depth);
+  if (r.certification) io::print_certification(*r.certification, co.certify_depth);
   const bool uncertified = r.certification && !r.certification->certified();
   const bool valid = r.valid && folded_at_nodes == 0;
   const char* cmd = o.command.c_str();
@@ -223,7 +223,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
           .set("elements_folded_at_nodes", folded_at_nodes)
           .set("max_cad_distance", r.conformity.max_distance)
           .set("output", valid ? io::Json(o.out) : io::Json());
-      if (r.certification) add_certification(cases.back(), *r.certification, co.certify_depth);
+      if (r.certification) io::add_certification(cases.back(), *r.certification, co.certify_depth);
     }
     return cases;
   };

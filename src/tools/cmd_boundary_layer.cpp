@@ -39,11 +39,11 @@
 #include <boost/program_options.hpp>
 
 #include "boundary_layer_report.hpp"
-#include "certification_report.hpp"
 #include "certify_options.hpp"
 #include "command.hpp"
 #include "hom/geometry/circle.hpp"
 #include "hom/geometry/sphere.hpp"
+#include "hom/io/certification_report.hpp"
 #include "hom/io/report.hpp"
 #include "hom/optimize/boundary_layer_pipeline.hpp"
 #include "hom/quality/mesh_quality.hpp"
@@ -146,7 +146,7 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
     std::printf("INVALID: %s\n", hom::tools::smoothed_tangled_message(r).c_str());
   else
     std::printf("%s\n", r.valid ? "valid at every quadrature point" : "INVALID: some elements have det <= 0 at a quadrature point");
-  if (r.certification) hom::tools::print_certification(*r.certification, o.certify.depth);
+  if (r.certification) hom::io::print_certification(*r.certification, o.certify.depth);
   const bool certified = !o.certify.on || (r.certification && r.certification->certified());
   if (r.valid && !certified)
     std::printf("NOT CERTIFIED: %d of %d elements are not certified valid after the repair rounds\n",
@@ -162,7 +162,7 @@ int insert(const MeshT& mesh, const BoundaryLayerCli& o) {
   }
   if (!o.json.empty()) {
     auto cases = hom::tools::boundary_layer_cases(o.in, r, opt.layer);
-    if (r.certification) hom::tools::add_certification(cases.back(), *r.certification, o.certify.depth);
+    if (r.certification) hom::io::add_certification(cases.back(), *r.certification, o.certify.depth);
     hom::io::write_report(o.json, "hom boundary-layer", HOM_VERSION, std::move(cases));
     std::printf("wrote %s\n", o.json.c_str());
   }

@@ -49,9 +49,9 @@
 
 #include <boost/program_options.hpp>
 
-#include "certification_report.hpp"
 #include "certify_options.hpp"
 #include "command.hpp"
+#include "hom/io/certification_report.hpp"
 #include "hom/io/report.hpp"
 #include "hom/measure/oddy_measure.hpp"
 #include "hom/measure/shape_measure.hpp"
@@ -69,11 +69,6 @@
 namespace po = boost::program_options;
 
 namespace {
-
-/// Free coordinates up to which `--solver auto` picks the assembled Newton
-/// solver; above it the sparse Hessian's factorization costs more memory and
-/// time than the matrix-free Newton-CG iterations.
-constexpr long auto_newton_max_dofs = 20000;
 
 struct OptimizeCli {
   std::string in, out;
@@ -131,9 +126,9 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
   hom::OptimizeOptions opt;
   std::string solver_note;
   if (o.solver == "auto") {
-    opt.solver = free_dofs <= auto_newton_max_dofs ? hom::SolverKind::newton : hom::SolverKind::matrix_free_newton;
-    solver_note = " (auto: " + std::to_string(free_dofs) + (free_dofs <= auto_newton_max_dofs ? " <= " : " > ") +
-                  std::to_string(auto_newton_max_dofs) + " free coordinates)";
+    opt.solver = hom::auto_solver_kind(free_dofs);
+    solver_note = " (auto: " + std::to_string(free_dofs) + (free_dofs <= hom::auto_newton_max_dofs ? " <= " : " > ") +
+                  std::to_string(hom::auto_newton_max_dofs) + " free coordinates)";
   } else {
     opt.solver = hom::parse_solver_kind(o.solver);
   }
@@ -213,7 +208,7 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
       certification = hom::certification_outcome(hom::certify_mesh(mesh, co).elements, hom::RepairStop::no_free_nodes);
     }
   }
-  if (certification) hom::tools::print_certification(*certification, o.certify.depth);
+  if (certification) hom::io::print_certification(*certification, o.certify.depth);
 
   // Outputs only once the optimization is done, each written atomically.
   hom::io::write_msh(o.out, mesh, same_format_as(data));
@@ -259,7 +254,7 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
         .set("converged", result ? result->result.converged : true)
         .set("time_s", result ? result->time_s : 0.0)
         .set("peak_rss_mb", peak_rss_mb());
-    if (certification) hom::tools::add_certification(optimized, *certification, o.certify.depth);
+    if (certification) hom::io::add_certification(optimized, *certification, o.certify.depth);
     hom::io::write_report(o.json, "hom optimize", HOM_VERSION, {make_case("initial", initial), std::move(optimized)});
     std::printf("wrote %s\n", o.json.c_str());
   }

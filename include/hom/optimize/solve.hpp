@@ -38,6 +38,17 @@ inline SolverKind parse_solver_kind(const std::string& s) {
   throw std::invalid_argument("unknown solver '" + s + "' (expected newton, matrix-free or gauss-seidel)");
 }
 
+/// Free coordinates up to which the "auto" solver choice (`hom optimize
+/// --solver auto`, `hom curve`) is the assembled Newton method; above it the
+/// sparse Hessian's factorization costs more memory and time than the
+/// matrix-free Newton-CG iterations.
+constexpr long auto_newton_max_dofs = 20000;
+
+/// The "auto" solver for a problem of `free_dofs` free coordinates.
+inline SolverKind auto_solver_kind(long free_dofs) {
+  return free_dofs <= auto_newton_max_dofs ? SolverKind::newton : SolverKind::matrix_free_newton;
+}
+
 /// Runs the solver `kind` (default settings) on `problem`.
 template <ElementFamily Family, class Measure>
 SolverResult solve_with(SolverKind kind, OptimizationProblem<Family, Measure>& problem, const SolverOptions& options) {

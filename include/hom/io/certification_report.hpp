@@ -1,8 +1,9 @@
 #pragma once
 /// @file certification_report.hpp
-/// How `hom optimize --certify` and `hom curve --certify` tell the outcome of
-/// the certify stage (optimize/certified.hpp): a few lines on stdout and the
-/// JSON keys of `hom quality --certify` plus the stage's own (DESIGN.md).
+/// How the tools (`hom optimize --certify`, `hom curve --certify`,
+/// `hom boundary-layer`) and the harnesses tell the outcome of the certify
+/// stage (optimize/certified.hpp): a few lines on stdout and the JSON keys of
+/// `hom quality --certify` plus the stage's own (DESIGN.md).
 
 #include <cmath>
 #include <cstdio>
@@ -11,7 +12,7 @@
 #include "hom/io/json.hpp"
 #include "hom/optimize/certified.hpp"
 
-namespace hom::tools {
+namespace hom::io {
 
 inline void print_certification(const CertificationOutcome& c, int max_depth) {
   std::printf("certified (Bernstein bounds of det D phi_P, subdivision depth <= %d%s):\n", max_depth,
@@ -38,7 +39,7 @@ inline void print_certification(const CertificationOutcome& c, int max_depth) {
 /// Adds the certificate's keys to a report case. A surface mesh's bound is of
 /// g = (x_xi x x_eta) . n, not of its scaled Jacobian, so it has no
 /// certified_min_scaled_jacobian.
-inline void add_certification(io::Json& c, const CertificationOutcome& o, int max_depth) {
+inline void add_certification(Json& c, const CertificationOutcome& o, int max_depth) {
   c.set("certified_valid", o.valid).set("certified_invalid", o.invalid).set("undecided", o.undecided);
   if (!o.on_surface && std::isfinite(o.min_scaled_jacobian))
     c.set("certified_min_scaled_jacobian", o.min_scaled_jacobian);
@@ -52,4 +53,4 @@ inline void add_certification(io::Json& c, const CertificationOutcome& o, int ma
       .set("initial_undecided", o.initial_undecided);
 }
 
-}  // namespace hom::tools
+}  // namespace hom::io
