@@ -28,7 +28,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from plot_cut import Cut, draw  # noqa: E402
+from plot_cut import Cut, draw, save_figure  # noqa: E402
 
 TITLES = {
     "sphere": ("sphere (table 6.4): cut through the centre, normal z", "wall at 45 degrees"),
@@ -80,12 +80,8 @@ def plot_case(out_dir, case):
     else:
         axes[1].axis("off")
         axes[1].set_title("no layer elements in the cut", fontsize=9)
-    fig.colorbar(face, ax=axes.ravel().tolist(), shrink=0.8, label="element quality (shape measure, last stage's ideal)")
-    fig.suptitle(title, fontsize=11)
-    out = os.path.join(out_dir, f"cut_{case}.png")
-    fig.savefig(out, dpi=150)
-    plt.close(fig)
-    print(f"plot_boundary_layer: wrote {out}")
+    save_figure(fig, axes, face, title, "element quality (shape measure, last stage's ideal)",
+                os.path.join(out_dir, f"cut_{case}.png"))
 
 
 def main():

@@ -108,6 +108,17 @@ def draw(ax, cut, outline, window, title, line_width):
     return face
 
 
+def save_figure(fig, axes, face, title, colour_label, out):
+    """The colour bar of `face` (if any panel was drawn) beside `axes`, the
+    title, and the PNG `out`."""
+    if face is not None:
+        fig.colorbar(face, ax=axes.ravel().tolist(), shrink=0.8, label=colour_label)
+    fig.suptitle(title, fontsize=11)
+    fig.savefig(out, dpi=150)
+    plt.close(fig)
+    print(f"{os.path.basename(sys.argv[0])}: wrote {out}")
+
+
 def stage_files(out_dir, name):
     """[(stage, path)] of NAME's cut CSVs, known stages first."""
     found = {}
@@ -131,13 +142,7 @@ def plot_stages(out_dir, name, title):
             ax.set_title(f"{stage}: the plane meets no element", fontsize=9)
             continue
         face = draw(ax, cut, cut.outline(), None, stage, 0.2)
-    if face is not None:
-        fig.colorbar(face, ax=axes.ravel().tolist(), shrink=0.8, label="element quality (shape measure)")
-    fig.suptitle(title, fontsize=11)
-    out = os.path.join(out_dir, f"{name}_cut.png")
-    fig.savefig(out, dpi=150)
-    plt.close(fig)
-    print(f"plot_cut: wrote {out}")
+    save_figure(fig, axes, face, title, "element quality (shape measure)", os.path.join(out_dir, f"{name}_cut.png"))
     return 0
 
 
