@@ -318,7 +318,8 @@ void write_vtu(const Options& o, const std::string& file, const TetMesh& mesh, c
 /// OUT/smooth_<table>_<stage>_cut.csv (file comment), unless --no-cut.
 void write_cut(const Options& o, const std::string& table, const std::string& stage, const TetMesh& mesh,
                const hom::MeshQuality& mq) {
-  if (o.cut) hom::bench::write_mid_z_cut_csv((o.out / ("smooth_" + table + "_" + stage + "_cut.csv")).string(), mesh, mq);
+  if (!o.cut) return;
+  hom::bench::write_mid_z_cut_csv((o.out / ("smooth_" + table + "_" + stage + "_cut.csv")).string(), mesh, mq);
 }
 
 /// Draws OUT/smooth_<table>_cut.png from the table's cuts (bench/plot_cut.py).

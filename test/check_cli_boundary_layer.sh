@@ -57,7 +57,8 @@ c = json.load(open(sys.argv[1]))["cases"][-1]
 assert c["certified_valid"] == c["elements"], c
 ' "$work/tet.json" || fail "tet: not every element certified valid"
 # Triangles: 3 x 3 cells, wall y = 0 (entity 3: 3 edges); 4 (L - 1) + 3 per wall edge.
-bl_case tri tri 3 3 11 3 --bl-first 0.01 --bl-layers 3 --p 3
+# --bl-total 0.07 = 0.01 + 0.02 + 0.04: the three layers that reach it.
+bl_case tri tri 3 3 11 3 --bl-first 0.01 --bl-total 0.07 --p 3
 
 # A layer thicker than the domain (H = 3.5 in the unit square): the smoothed
 # linear mesh stays tangled, so the degree-P stages are not run; exit 3, the
@@ -94,6 +95,8 @@ expect 2 "$in" --walls 5                                         # no --bl-first
 expect 2 "$in" --walls 5 --bl-first 0                            # bad height
 expect 2 "$in" --walls 5 --bl-first 0.1 --bl-growth 0.5         # bad growth
 expect 2 "$in" --walls 5 --bl-first 0.1 --bl-layers 0           # bad layers
+expect 2 "$in" --walls 5 --bl-first 0.1 --bl-layers 3 --bl-total 0.7   # layers given twice
+expect 2 "$in" --walls 5 --bl-first 0.1 --bl-total -1           # bad total height
 expect 2 "$in" --walls 99 --bl-first 0.1                        # no such wall
 expect 2 "$in" --walls x --bl-first 0.1                         # not a tag
 expect 2 "$in" --walls 5 --bl-first 0.1 --wall-geometry sphere:1,2   # bad geometry

@@ -17,6 +17,7 @@
 
 #include "hom/mesh/boundary_layer.hpp"
 #include "hom/mesh/elevate.hpp"
+#include "hom/mesh/layer_count.hpp"
 #include "hom/geometry/circle.hpp"
 #include "hom/geometry/cylinder.hpp"
 #include "hom/geometry/plane.hpp"
@@ -211,6 +212,34 @@ TEST_CASE_TEMPLATE("boundary layer: the thinner the first level, the larger the 
     CHECK(bl.max_aspect_ratio > previous);
     previous = bl.max_aspect_ratio;
   }
+}
+
+TEST_CASE("boundary layer: the number of layers that reach a total height") {
+  // Whole levels: 1 + 2 + 4 = 7 is three layers, a little more is four.
+  CHECK(hom::layers_for_total_height(1.0, 2.0, 7.0) == 3);
+  CHECK(hom::layers_for_total_height(1.0, 2.0, 7.0 + 1e-9) == 4);
+  CHECK(hom::layers_for_total_height(1.0, 2.0, 0.5) == 1);
+  CHECK(hom::layers_for_total_height(0.5, 1.0, 2.0) == 4);  // no growth
+  CHECK(hom::layers_for_total_height(1e-3, 2.0, 0.015) == 4);  // the README's example
+  // Against BoundaryLayerOptions' own heights: the fewest layers whose top
+  // reaches the total.
+  for (double h0 : {1e-6, 2e-4, 0.01})
+    for (double g : {1.0, 1.2, 2.0, 3.7})
+      for (double total : {0.03, 0.1, 0.7}) {
+        CAPTURE(h0);
+        CAPTURE(g);
+        CAPTURE(total);
+        if (g == 1.0 && total / h0 > 1000) continue;  // beyond max_layers, checked below
+        const int n = hom::layers_for_total_height(h0, g, total);
+        const hom::BoundaryLayerOptions reached{.first_height = h0, .growth = g, .layers = n};
+        CHECK(reached.total_height() >= total * (1.0 - 1e-12));
+        CHECK(reached.cumulative_height(n - 1) < total);
+      }
+  CHECK_THROWS_AS(hom::layers_for_total_height(1e-6, 1.0, 1.0), std::invalid_argument);  // 10^6 layers
+  CHECK_THROWS_AS(hom::layers_for_total_height(0.0, 2.0, 1.0), std::invalid_argument);
+  CHECK_THROWS_AS(hom::layers_for_total_height(1.0, 0.5, 1.0), std::invalid_argument);
+  CHECK_THROWS_AS(hom::layers_for_total_height(1.0, 2.0, -1.0), std::invalid_argument);
+  CHECK_THROWS_AS(hom::layers_for_total_height(1.0, 2.0, std::nan("")), std::invalid_argument);
 }
 
 TEST_CASE("boundary layer: aspect ratio of regular simplices and invariance") {

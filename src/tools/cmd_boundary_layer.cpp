@@ -47,6 +47,7 @@
 #include "hom/io/report.hpp"
 #include "hom/optimize/boundary_layer_pipeline.hpp"
 #include "hom/quality/mesh_quality.hpp"
+#include "layer_options.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
 
@@ -58,7 +59,7 @@ using hom::tools::UsageError;
 
 struct BoundaryLayerCli {
   std::string in, out, walls, geometry = "none", json, vtu;
-  double first = 0.0, growth = 2.0, extrusion = 0.1;
+  double first = 0.0, growth = 2.0, extrusion = 0.1, total = 0.0;
   int layers = 7, p = 2, threads = 0, max_iterations = 200;
   bool verbose = false;
   hom::tools::CertifyCli certify;
@@ -209,6 +210,8 @@ int run(int argc, char** argv) {
       ("bl-first", po::value(&o.first), "height of the first layer")                                   //
       ("bl-growth", po::value(&o.growth)->default_value(2.0), "ratio of consecutive layer heights (>= 1)")  //
       ("bl-layers", po::value(&o.layers)->default_value(7), "number of layers (the last is the transition)")  //
+      ("bl-total", po::value(&o.total),
+       "instead of --bl-layers: the total height; the fewest layers that reach it")  //
       ("extrusion", po::value(&o.extrusion)->default_value(0.1),
        "the inserted topology is extruded by this fraction of the total height")  //
       ("p", po::value(&o.p)->default_value(2), "polynomial degree of the result")  //
@@ -224,6 +227,8 @@ int run(int argc, char** argv) {
                     "folds between quadrature points");
   po::variables_map vm;
   if (!hom::tools::parse_options("boundary-layer", argc, argv, opts, {{"input", po::value(&o.in)}}, vm)) return 0;
+  if (o.first > 0.0)
+    o.layers = hom::tools::layers_from_options("boundary-layer", vm, o.first, o.growth, o.total, o.layers);
   check_options(o);
   const auto data = hom::io::read_msh_data(o.in);
   return hom::tools::with_mesh<hom::WarpBlend>(data, [&](auto& mesh) -> int {

@@ -66,6 +66,7 @@
 #include "curve_mesh.hpp"
 #include "curve_models.hpp"
 #include "hom/optimize/solve.hpp"
+#include "layer_options.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
 
@@ -91,7 +92,7 @@ struct CurveCli {
   bool verbose = false;
   hom::tools::CertifyCli certify;
   double bl_first = 0.0;  ///< > 0: insert a boundary layer
-  double bl_growth = 2.0, bl_extrusion = 0.1;
+  double bl_growth = 2.0, bl_extrusion = 0.1, bl_total = 0.0;
   int bl_layers = 7;
   std::string bl_walls;
   bool bl_options_given = false;  ///< a --bl-* option other than --bl-first on the command line
@@ -225,6 +226,8 @@ int run(int argc, char** argv) {
        "insert a boundary layer: height of its first layer (0: none)")  //
       ("bl-growth", po::value(&o.bl_growth)->default_value(2.0), "boundary layer: ratio of consecutive heights (>= 1)")  //
       ("bl-layers", po::value(&o.bl_layers)->default_value(7), "boundary layer: number of layers")  //
+      ("bl-total", po::value(&o.bl_total),
+       "boundary layer, instead of --bl-layers: the total height; the fewest layers that reach it")  //
       ("bl-walls", po::value(&o.bl_walls),
        "boundary layer: the wall's CAD face tags, comma-separated (default: the cavities' faces, else the faces "
        "off the bounding box)")  //
@@ -239,8 +242,10 @@ int run(int argc, char** argv) {
   po::variables_map vm;
   if (!hom::tools::parse_options("curve", argc, argv, opts, {{"model", po::value(&o.model)}}, vm)) return 0;
   o.p_given = vm.count("p") && !vm["p"].defaulted();
-  for (const char* b : {"bl-growth", "bl-layers", "bl-walls", "bl-extrusion"})
+  for (const char* b : {"bl-growth", "bl-layers", "bl-total", "bl-walls", "bl-extrusion"})
     o.bl_options_given = o.bl_options_given || (vm.count(b) && !vm[b].defaulted());
+  if (o.bl_first > 0.0)
+    o.bl_layers = hom::tools::layers_from_options("curve", vm, o.bl_first, o.bl_growth, o.bl_total, o.bl_layers);
   check_options(o);
 
   hom::cad::CadModel cad =
