@@ -322,13 +322,19 @@ def git_commit():
     return head + (" (dirty: uncommitted changes in the tree)" if dirty else "")
 
 
+def utc_now():
+    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+
+
 def run_harness(spec, build, work, log):
     """Runs one harness; returns its record (command, wall time, status, report path)."""
     name, kind = spec["name"], spec.get("kind", "json")
     binary = os.path.join(build, "bench", spec["binary"])
     out = os.path.join(work, name)
     rec = dict(name=name, binary=spec["binary"], kind=kind, role=spec.get("role", "table"),
-               conditions=spec.get("conditions", ""), report=None, rc=None, wall_s=None, status="not run")
+               conditions=spec.get("conditions", ""), report=None, rc=None, wall_s=None, status="not run",
+               # Per run, because --only lets a report gather runs made at different commits and days.
+               commit=git_commit(), started=utc_now(), load=os.getloadavg()[0])
     if not os.access(binary, os.X_OK):
         rec["status"] = "not built (%s missing)" % os.path.relpath(binary, REPO)
         log("%-26s %s" % (name, rec["status"]))
@@ -1089,6 +1095,14 @@ def checks_cell(rep):
     return "%d, all hold" % n if not failed else "%d, **failed**: %s" % (n, "; ".join(failed))
 
 
+def run_at_cell(rec):
+    """Commit, start and 1-minute load average of one run (records older than these fields: "-")."""
+    if not rec.get("commit"):
+        return "-"
+    commit = rec["commit"][:7] + (" (dirty)" if "dirty" in rec["commit"] else "")
+    return "%s, %s, load %.1f" % (commit, rec["started"][:16], rec.get("load", float("nan")))
+
+
 def write_report(args, meta, runs, reports, out_dir, work, total_s):
     full = args.mode == "full"
     lines = ["# hom: reproduction report of Gargallo-Peiró (2014)", "",
@@ -1107,10 +1121,10 @@ def write_report(args, meta, runs, reports, out_dir, work, total_s):
              "with other work, and wall times are pessimistic)" % (total_s, sum(r.get("cpu_s") or 0 for r in runs.values())),
              ""]
     lines += ["## Runs", "",
-              md_table(["part", "command", "wall s", "CPU s", "status", "claim checks"],
+              md_table(["part", "command", "wall s", "CPU s", "status", "claim checks", "run at"],
                        [[r["name"], "`%s`" % r.get("command", r["binary"]), num(r.get("wall_s"), 1),
                          num(r.get("cpu_s"), 1), r["status"],
-                         checks_cell(reports.get(r["name"]))]
+                         checks_cell(reports.get(r["name"])), run_at_cell(r)]
                         for r in runs.values()]), ""]
     if not full:
         lines += ["Left out of the quick mode (too slow for CI even in their smallest setting; `paper/make --full` "
@@ -1192,7 +1206,7 @@ def main():
         ap.error("--build: no directory %s" % args.build)
     os.makedirs(work, exist_ok=True)
     os.makedirs(out_dir, exist_ok=True)
-    started = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+    started = utc_now()
     commit, machine = git_commit(), machine_description()  # before the runs: the load they started under
 
     def log(msg):
@@ -1211,8 +1225,9 @@ def main():
                        conditions="", report=None, rc=None, command=spec["binary"] + " " + " ".join(spec["args"]))
         elif args.no_run or (only and name not in only):
             rec = previous.get(name)
-            if not rec:
-                continue
+            if not rec:  # listed, so that a partial report shows what it lacks
+                rec = dict(name=name, binary=spec["binary"], kind=spec.get("kind", "json"), report=None, rc=None,
+                           status="not run yet", conditions="", command=spec["binary"] + " " + " ".join(spec["args"]))
         else:
             rec = run_harness(spec, args.build, work, log)
         runs[name] = rec
