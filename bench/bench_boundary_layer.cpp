@@ -461,9 +461,7 @@ class Runner {
                  const std::vector<std::optional<int>>& level, const hom::bench::CutPlane& plane) {
     const auto q = hom::mesh_quality(m, hom::ShapeMeasure{}, ideal,
                                      hom::quadrature_for<hom::Simplex<3>, hom::DefaultExactness>(m.degree()));
-    // 2p sub-intervals per edge: the piecewise-linear cut then sits within a
-    // small fraction of the curving from the true one.
-    const auto polygons = hom::bench::cut_mesh(m, plane, std::max(2, 2 * m.degree()));
+    const auto polygons = hom::bench::cut_mesh(m, plane, hom::bench::cut_lattice_degree(m.degree()));
     fs::create_directories(s_.out);
     const fs::path path = s_.out / ("cut_" + name + ".csv");
     hom::bench::write_cut_csv(path.string(), polygons, q, level);

@@ -133,6 +133,11 @@ void cut_element(const Mesh<Simplex<3>, Nodes>& mesh, int e, const CutPlane& pla
 
 }  // namespace detail
 
+/// The lattice degree the harnesses cut with: 2p sub-intervals per edge, so that
+/// the piecewise-linear cut sits within a small fraction of the curving from the
+/// true one (test_mesh_cut measures the error's second order).
+inline int cut_lattice_degree(int mesh_degree) { return std::max(2, 2 * mesh_degree); }
+
 /// The cut of the curved mesh by `plane`, every element near it split into the
 /// sub-tetrahedra of the degree-n lattice (n >= 2p keeps the piecewise-linear
 /// error well below the curving).
@@ -166,12 +171,12 @@ inline void write_cut_csv(const std::string& path, const std::vector<CutPolygon>
 }
 
 /// The cut of `mesh` by the plane z through the middle of its bounding box
-/// (the cavity's centre of the cube meshes of tables 4.1, 4.2), 2p
-/// sub-intervals per edge, written by write_cut_csv with no layer levels.
+/// (the cavity's centre of the cube meshes of tables 4.1, 4.2), on the
+/// cut_lattice_degree lattice, written by write_cut_csv with no layer levels.
 template <class Nodes>
 void write_mid_z_cut_csv(const std::string& path, const Mesh<Simplex<3>, Nodes>& mesh, const MeshQuality& quality) {
   const Eigen::Vector3d centre = 0.5 * (mesh.nodes().rowwise().minCoeff() + mesh.nodes().rowwise().maxCoeff());
-  const auto polygons = cut_mesh(mesh, CutPlane::normal_z(centre), std::max(2, 2 * mesh.degree()));
+  const auto polygons = cut_mesh(mesh, CutPlane::normal_z(centre), cut_lattice_degree(mesh.degree()));
   write_cut_csv(path, polygons, quality, std::vector<std::optional<int>>(mesh.num_elements()));
 }
 
