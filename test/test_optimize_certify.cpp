@@ -10,14 +10,17 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <set>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
 
 #include "hom/basis/lagrange.hpp"
+#include "hom/io/certification_report.hpp"
 #include "hom/mesh/elevate.hpp"
 #include "hom/mesh/structured.hpp"
 #include "hom/nodes/warp_blend.hpp"
@@ -380,4 +383,44 @@ TEST_CASE_TEMPLATE("certify: a fold between the quadrature points is pulled back
   CHECK(t < 1.0);
   for (int i = 0; i < mesh.num_nodes(); ++i)
     if (i != moved) CHECK(mesh.node(i) == start.node(i));
+}
+
+// The tools' certificate lines (io/certification_report.hpp), written to a
+// temporary file: counts, the repair line, the first ten uncertified elements
+// and the stop reason, and nothing about uncertified elements when all hold.
+TEST_CASE("print_certification: the counts, the repair rounds and the first ten uncertified elements") {
+  auto printed = [](const CertificationOutcome& c) {
+    std::FILE* f = std::tmpfile();
+    REQUIRE(f);
+    hom::io::print_certification(c, 6, f);
+    std::rewind(f);
+    std::string text;
+    for (int ch; (ch = std::fgetc(f)) != EOF;) text += char(ch);
+    std::fclose(f);
+    return text;
+  };
+  CertificationOutcome c;
+  c.initial_valid = 88;
+  c.initial_invalid = 12;
+  c.valid = 88;
+  c.invalid = 12;
+  c.rounds = 2;
+  c.reason = RepairStop::no_progress;
+  for (int e = 0; e < 12; ++e) c.uncertified.push_back(3 * e);
+  const std::string text = printed(c);
+  CHECK(text.find("subdivision depth <= 6") != std::string::npos);
+  CHECK(text.find("after optimization: 88 certified valid, 12 certified invalid, 0 undecided") != std::string::npos);
+  CHECK(text.find("repair: 2 rounds") != std::string::npos);
+  const std::string first_ten = "NOT CERTIFIED: elements 0 3 6 9 12 15 18 21 24 27 ... (no new sentinel point)";
+  CHECK(text.find(first_ten) != std::string::npos);
+  CHECK(text.find(" 30") == std::string::npos);  // the eleventh is left out
+
+  CertificationOutcome ok;
+  ok.initial_valid = ok.valid = 5;
+  ok.min_scaled_jacobian = 0.25;
+  const std::string fine = printed(ok);
+  CHECK(fine.find("final: 5 certified valid, 0 certified invalid, 0 undecided") != std::string::npos);
+  CHECK(fine.find("certified min scaled Jacobian >= 0.2500") != std::string::npos);
+  CHECK(fine.find("NOT CERTIFIED") == std::string::npos);
+  CHECK(fine.find("repair:") == std::string::npos);
 }

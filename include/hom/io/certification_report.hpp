@@ -2,7 +2,7 @@
 /// @file certification_report.hpp
 /// How the tools (`hom optimize --certify`, `hom curve --certify`,
 /// `hom boundary-layer`) and the harnesses tell the outcome of the certify
-/// stage (optimize/certified.hpp): a few lines on stdout and the JSON keys of
+/// stage (optimize/certified.hpp): a few lines of text and the JSON keys of
 /// `hom quality --certify` plus the stage's own (DESIGN.md).
 
 #include <cmath>
@@ -14,25 +14,29 @@
 
 namespace hom::io {
 
-inline void print_certification(const CertificationOutcome& c, int max_depth) {
-  std::printf("certified (Bernstein bounds of det D phi_P, subdivision depth <= %d%s):\n", max_depth,
-              c.on_surface ? ", each surface element against its nodes' interpolated surface normals" : "");
-  std::printf("  after optimization: %d certified valid, %d certified invalid, %d undecided\n", c.initial_valid,
-              c.initial_invalid, c.initial_undecided);
+/// Writes the outcome to `out` (the tools' standard output by default): the
+/// counts after optimization, the repair rounds, the final counts and, when
+/// some element is not certified valid, the first ten of them and why the
+/// repair stopped.
+inline void print_certification(const CertificationOutcome& c, int max_depth, std::FILE* out = stdout) {
+  std::fprintf(out, "certified (Bernstein bounds of det D phi_P, subdivision depth <= %d%s):\n", max_depth,
+               c.on_surface ? ", each surface element against its nodes' interpolated surface normals" : "");
+  std::fprintf(out, "  after optimization: %d certified valid, %d certified invalid, %d undecided\n", c.initial_valid,
+               c.initial_invalid, c.initial_undecided);
   if (c.rounds > 0) {
     int iterations = 0;
     for (const auto& r : c.repairs) iterations += r.iterations;
-    std::printf("  repair: %d round%s (%d iterations, %d sentinel points), stopped on %s, %.3f s%s\n", c.rounds,
-                c.rounds == 1 ? "" : "s", iterations, c.sentinel_points, std::string(to_string(c.reason)).c_str(),
-                c.time_s, c.restored ? "; no fewer uncertified elements, so the optimized mesh is kept" : "");
+    std::fprintf(out, "  repair: %d round%s (%d iterations, %d sentinel points), stopped on %s, %.3f s%s\n", c.rounds,
+                 c.rounds == 1 ? "" : "s", iterations, c.sentinel_points, std::string(to_string(c.reason)).c_str(),
+                 c.time_s, c.restored ? "; no fewer uncertified elements, so the optimized mesh is kept" : "");
   }
-  std::printf("  final: %d certified valid, %d certified invalid, %d undecided", c.valid, c.invalid, c.undecided);
-  if (!c.on_surface) std::printf("; certified min scaled Jacobian >= %.4f", c.min_scaled_jacobian);
-  std::printf("\n");
+  std::fprintf(out, "  final: %d certified valid, %d certified invalid, %d undecided", c.valid, c.invalid, c.undecided);
+  if (!c.on_surface) std::fprintf(out, "; certified min scaled Jacobian >= %.4f", c.min_scaled_jacobian);
+  std::fprintf(out, "\n");
   if (!c.certified()) {
-    std::printf("  NOT CERTIFIED: elements");
-    for (std::size_t k = 0; k < c.uncertified.size() && k < 10; ++k) std::printf(" %d", c.uncertified[k]);
-    std::printf("%s (%s)\n", c.uncertified.size() > 10 ? " ..." : "", std::string(to_string(c.reason)).c_str());
+    std::fprintf(out, "  NOT CERTIFIED: elements");
+    for (std::size_t k = 0; k < c.uncertified.size() && k < 10; ++k) std::fprintf(out, " %d", c.uncertified[k]);
+    std::fprintf(out, "%s (%s)\n", c.uncertified.size() > 10 ? " ..." : "", std::string(to_string(c.reason)).c_str());
   }
 }
 
