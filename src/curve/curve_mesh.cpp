@@ -653,7 +653,8 @@ class Pipeline {
     int face = 0;
     FaceMesh mesh;
     std::vector<int> global;
-    std::vector<int> patch;  ///< patch (= element of a surface mesh) of each element
+    /// Of each face element, the mesh element it is (surface mesh) or bounds (volume mesh).
+    std::vector<int> patch;
     Eigen::Matrix2Xd uv;
   };
 
@@ -843,7 +844,7 @@ class Pipeline {
   void say_face_not_certified(const FacePatchMesh& fm, const CertificationOutcome& c) const {
     std::string elements;
     for (std::size_t k = 0; k < c.uncertified.size() && k < 5; ++k)
-      elements += (k ? " " : "") + std::to_string(patches_[fm.patch[c.uncertified[k]]].element);
+      elements += (k ? " " : "") + std::to_string(fm.patch[c.uncertified[k]]);
     if (c.uncertified.size() > 5) elements += " ...";
     say("  CAD face " + std::to_string(fm.face) + ": " + std::to_string(c.invalid) + " invalid, " +
         std::to_string(c.undecided) + " undecided of " + std::to_string(fm.mesh.num_elements()) + " (" +
