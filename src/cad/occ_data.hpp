@@ -28,6 +28,9 @@ struct OccSurfaceData {
   double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // UV box of the face
   bool periodic[2] = {false, false};
   double period[2] = {0, 0};
+  // Periodic for hom, but only closed for OpenCASCADE (S(U1, v) = S(U2, v)
+  // along a seam): evaluated at the representative in [lo, lo + period).
+  bool closed_only[2] = {false, false};
   double size = 0;                    // bounding-box diagonal
   std::string type;
   int grid_u = 0, grid_v = 0;         // projection start grid

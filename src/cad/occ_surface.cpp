@@ -63,13 +63,25 @@ std::shared_ptr<const OccSurfaceData> make_surface_data(const TopoDS_Face& face)
   BRepTools::UVBounds(face, d->u0, d->u1, d->v0, d->v1);
   // A parameter is periodic for the face only if the face closes around it
   // (it spans a whole period); otherwise the face's UV box bounds it.
-  if (d->surface->IsUPeriodic()) {
-    d->period[0] = d->surface->UPeriod();
-    d->periodic[0] = std::abs((d->u1 - d->u0) - d->period[0]) <= 1e-9 * d->period[0];
-  }
-  if (d->surface->IsVPeriodic()) {
-    d->period[1] = d->surface->VPeriod();
-    d->periodic[1] = std::abs((d->v1 - d->v0) - d->period[1]) <= 1e-9 * d->period[1];
+  // A surface that is closed but not periodic in a parameter (a B-spline
+  // loft through closed, non-periodic sections: S(U1, v) = S(U2, v) along a
+  // seam edge, often a crease such as a trailing edge) is treated as periodic
+  // with period U2 - U1 too, so that the elements beside the seam take
+  // parameters next to each other instead of spanning the whole range.
+  double bounds[2][2];
+  d->surface->Bounds(bounds[0][0], bounds[0][1], bounds[1][0], bounds[1][1]);
+  const bool native[2] = {bool(d->surface->IsUPeriodic()), bool(d->surface->IsVPeriodic())};
+  const bool closed[2] = {bool(d->surface->IsUClosed()), bool(d->surface->IsVClosed())};
+  const double lo[2] = {d->u0, d->v0}, hi[2] = {d->u1, d->v1};
+  for (int k = 0; k < 2; ++k) {
+    if (native[k])
+      d->period[k] = k == 0 ? d->surface->UPeriod() : d->surface->VPeriod();
+    else if (closed[k] && std::isfinite(bounds[k][1] - bounds[k][0]))
+      d->period[k] = bounds[k][1] - bounds[k][0];
+    else
+      continue;
+    d->periodic[k] = std::abs((hi[k] - lo[k]) - d->period[k]) <= 1e-9 * d->period[k];
+    d->closed_only[k] = d->periodic[k] && !native[k];
   }
   Bnd_Box box;
   BRepBndLib::Add(face, box);
@@ -102,14 +114,30 @@ std::shared_ptr<const OccSurfaceData> make_surface_data(const TopoDS_Face& face)
 
 OccSurface::OccSurface(std::shared_ptr<const detail::OccSurfaceData> data) : data_(std::move(data)) {}
 
+Eigen::Vector2d OccSurface::for_occ(const Eigen::Vector2d& uv) const {
+  Eigen::Vector2d p = uv;
+  for (int k = 0; k < 2; ++k) {
+    if (!data_->closed_only[k]) continue;
+    // The surface need not be smooth across its seam (a trailing edge): a
+    // parameter at either end of the range stays at that end, so that the
+    // derivatives there are its own side's; only one beyond is wrapped.
+    const ParameterRange r = range(k);
+    const double slack = 1e-9 * r.length();
+    p[k] = p[k] >= r.lo - slack && p[k] <= r.hi + slack ? std::clamp(p[k], r.lo, r.hi) : wrap(r, p[k]);
+  }
+  return p;
+}
+
 Eigen::Vector3d OccSurface::evaluate(const Eigen::Vector2d& uv) const {
-  return to_eigen(data_->surface->Value(uv[0], uv[1]).XYZ());
+  const Eigen::Vector2d q = for_occ(uv);
+  return to_eigen(data_->surface->Value(q[0], q[1]).XYZ());
 }
 
 Eigen::Matrix<double, 3, 2> OccSurface::derivatives(const Eigen::Vector2d& uv) const {
+  const Eigen::Vector2d q = for_occ(uv);
   gp_Pnt p;
   gp_Vec du, dv;
-  data_->surface->D1(uv[0], uv[1], p, du, dv);
+  data_->surface->D1(q[0], q[1], p, du, dv);
   Eigen::Matrix<double, 3, 2> d;
   d.col(0) = to_eigen(du.XYZ());
   d.col(1) = to_eigen(dv.XYZ());
@@ -119,7 +147,8 @@ Eigen::Matrix<double, 3, 2> OccSurface::derivatives(const Eigen::Vector2d& uv) c
 SurfaceSecondDerivatives OccSurface::second_derivatives(const Eigen::Vector2d& uv) const {
   gp_Pnt p;
   gp_Vec du, dv, duu, dvv, duv;
-  data_->surface->D2(uv[0], uv[1], p, du, dv, duu, dvv, duv);
+  const Eigen::Vector2d q = for_occ(uv);
+  data_->surface->D2(q[0], q[1], p, du, dv, duu, dvv, duv);
   SurfaceSecondDerivatives s;
   s.uu = to_eigen(duu.XYZ());
   s.uv = to_eigen(duv.XYZ());

@@ -12,7 +12,10 @@
 ///   - a parameter in which the surface is periodic *and* the face spans a
 ///     whole period (a full cylinder, a sphere's longitude; the face has a
 ///     seam edge) is periodic, range [lo, lo + period) with lo the face's
-///     lower UV bound;
+///     lower UV bound. A surface that is only closed in the parameter
+///     (S(U1, v) = S(U2, v): a B-spline loft through closed sections, its
+///     seam often a crease) counts as periodic with period U2 - U1, and is
+///     evaluated at the representative in [lo, lo + period);
 ///   - any other parameter is bounded by the face's UV box
 ///     (BRepTools::UVBounds), not periodic. The box contains the trimmed
 ///     face; `contains` tells whether a (u, v) is inside the trimming.
@@ -72,6 +75,9 @@ class OccSurface {
   const detail::OccSurfaceData& data() const { return *data_; }
 
  private:
+  /// uv with each closed-only periodic parameter brought into its range.
+  Eigen::Vector2d for_occ(const Eigen::Vector2d& uv) const;
+
   std::shared_ptr<const detail::OccSurfaceData> data_;
 };
 
