@@ -383,3 +383,66 @@ TEST_CASE("a mesh that does not fit the model is an error naming what is wrong")
   }
   CHECK_THROWS_AS((cad::curve_mesh<Simplex<2>, 2>(m, linear, options(1))), std::invalid_argument);
 }
+
+namespace {
+
+// The faces of `m` that are B-spline surfaces periodic in some parameter
+// (for hom); for each, the seam closes (S at lo and at hi agree) and the
+// surface continues periodically beyond the range, value and derivatives
+// (OpenCASCADE would extrapolate a surface that is only closed).
+int periodic_bspline_faces(const cad::CadModel& m) {
+  int found = 0;
+  for (int f = 1; f <= m.num_faces(); ++f) {
+    const auto s = m.surface(f);
+    if (s.type() != "bspline") continue;
+    for (int k = 0; k < 2; ++k) {
+      const ParameterRange r = s.range(k), other = s.range(1 - k);
+      if (!r.periodic) continue;
+      ++found;
+      CAPTURE(f);
+      CAPTURE(k);
+      const double tol = 1e-9 * s.size();
+      for (double t : {0.1, 0.45, 0.8}) {
+        Eigen::Vector2d a;
+        a[1 - k] = other.lo + 0.37 * other.length();
+        a[k] = r.lo + t * r.length();
+        Eigen::Vector2d b = a, lo = a, hi = a;
+        b[k] += r.length();
+        lo[k] = r.lo;
+        hi[k] = r.hi;
+        CHECK((s.evaluate(a) - s.evaluate(b)).norm() <= tol);
+        CHECK((s.derivatives(a) - s.derivatives(b)).norm() <= 1e-9 * s.derivatives(a).norm());
+        CHECK((s.evaluate(lo) - s.evaluate(hi)).norm() <= 1e-7 * s.size());
+      }
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+TEST_CASE("propeller_model: one solid, blades fused to the hub, lofted blade faces periodic around their sections") {
+  for (int blades : {3, 4}) {
+    CAPTURE(blades);
+    const auto m = cad::propeller_model(blades);
+    CHECK(m.num_solids() == 1);
+    CHECK(m.num_faces() == 3 + 2 * blades);  // hub side and ends; each blade's loft face and flat tip
+    CHECK(periodic_bspline_faces(m) == blades);
+  }
+  CHECK_THROWS_AS(cad::propeller_model(1), std::invalid_argument);
+}
+
+TEST_CASE("wing_domain_model: a box around a NACA 0012 half-wing whose sides meet at edges, not at a seam") {
+  const auto m = cad::wing_domain_model();
+  CHECK(m.num_solids() == 1);
+  // The box's 6 faces (z = 0 with the root's hole) and the wing's upper and
+  // lower loft faces and flat tip; no closed surface.
+  CHECK(m.num_faces() == 9);
+  CHECK(periodic_bspline_faces(m) == 0);
+  // The wing's surface: every point of the root section lies on the box's
+  // face z = 0 and the sharp trailing edge at (1, 0, 0) is a model vertex.
+  bool trailing_edge = false;
+  for (int v = 1; v <= m.num_vertices(); ++v) trailing_edge |= (m.vertex(v) - Eigen::Vector3d(1, 0, 0)).norm() < 1e-9;
+  CHECK(trailing_edge);
+  CHECK_THROWS_AS(cad::wing_domain_model(0.0), std::invalid_argument);
+}

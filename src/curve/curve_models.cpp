@@ -9,12 +9,16 @@
 #include <vector>
 
 #include <BRepAlgoAPI_Cut.hxx>
+#include <BRepAlgoAPI_Fuse.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepFilletAPI_MakeFillet2d.hxx>
+#include <BRepOffsetAPI_ThruSections.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakePrism.hxx>
 #include <BRep_Tool.hxx>
 #include <GC_MakeArcOfCircle.hxx>
@@ -30,6 +34,7 @@
 #include <TopoDS_Wire.hxx>
 #include <gp_Ax2.hxx>
 #include <gp_Circ.hxx>
+#include <gp_Elips.hxx>
 #include <gp_Pnt.hxx>
 #include <gp_Trsf.hxx>
 #include <gp_Vec.hxx>
@@ -57,6 +62,33 @@ TopoDS_Face single_face(const TopoDS_Shape& shape, const char* what) {
   ex.Next();
   if (ex.More()) throw std::runtime_error(std::string("hom::cad: ") + what + ": more than one face");
   return f;
+}
+
+// The NACA 00tt profile of chord `chord` with its leading edge at (x0, 0, z):
+// two B-splines through points of its upper and lower sides (cosine spacing,
+// denser at both edges) that meet at the leading edge and at the closed, sharp
+// trailing edge. Two edges, not one closed curve: a loft through them has the
+// trailing edge as an edge between two faces, not as the seam of one closed
+// surface whose two sides meet at a crease.
+TopoDS_Wire naca_section(double thickness, double chord, double x0, double z) {
+  const int per_side = 40;
+  auto half_thickness = [thickness](double x) {  // NACA four-digit series, closed trailing edge
+    return 5 * thickness *
+           (0.2969 * std::sqrt(x) - 0.1260 * x - 0.3516 * x * x + 0.2843 * x * x * x - 0.1036 * x * x * x * x);
+  };
+  auto side = [&](double sign) {  // trailing edge to leading edge (upper), or back (lower)
+    Handle(TColgp_HArray1OfPnt) pts = new TColgp_HArray1OfPnt(1, per_side + 1);
+    for (int i = 0; i <= per_side; ++i) {
+      const int k = sign > 0 ? i : per_side - i;
+      const double x = 0.5 * (1 + std::cos(pi * k / per_side));
+      pts->SetValue(i + 1, gp_Pnt(x0 + chord * x, sign * chord * half_thickness(x), z));
+    }
+    GeomAPI_Interpolate interp(pts, /*periodic=*/false, 1e-9);
+    interp.Perform();
+    if (!interp.IsDone()) throw std::runtime_error("hom::cad: the NACA section's interpolation failed");
+    return BRepBuilderAPI_MakeEdge(interp.Curve()).Edge();
+  };
+  return BRepBuilderAPI_MakeWire(side(1.0), side(-1.0)).Wire();
 }
 
 template <class F>
@@ -140,6 +172,57 @@ CadModel gear_model(int teeth, double radius, double thickness) {
     BRepPrimAPI_MakePrism prism(section, gp_Vec(0, 0, thickness));
     if (!prism.IsDone()) throw std::runtime_error("hom::cad::gear_model: the extrusion failed");
     return prism.Shape();
+  });
+}
+
+CadModel propeller_model(int blades) {
+  if (blades < 2) throw std::invalid_argument("hom::cad::propeller_model: need >= 2 blades");
+  return built("propeller", [&] {
+    const double hub_radius = 0.3, hub_length = 0.6;
+    TopoDS_Shape part =
+        BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -0.5 * hub_length), gp::DZ()), hub_radius, hub_length).Shape();
+    // Blade sections along +x: radius, chord, pitch angle (degrees from the
+    // hub's plane). The first lies inside the hub, so that the fuse cuts the
+    // blade's root on the cylinder.
+    struct Section {
+      double radius, chord, pitch;
+    };
+    const Section sections[] = {{0.15, 0.50, 60}, {0.6, 0.46, 45}, {1.0, 0.36, 32}, {1.3, 0.22, 24}};
+    BRepOffsetAPI_ThruSections loft(/*isSolid=*/true, /*ruled=*/false);
+    loft.CheckCompatibility(false);  // one elliptic edge per section, seams aligned by construction
+    for (const Section& s : sections) {
+      const double b = s.pitch * pi / 180;
+      const gp_Dir chord_direction(0, std::cos(b), std::sin(b));
+      const gp_Elips e(gp_Ax2(gp_Pnt(s.radius, 0, 0), gp::DX(), chord_direction), 0.5 * s.chord, 0.09 * s.chord);
+      loft.AddWire(BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(e).Edge()).Wire());
+    }
+    loft.Build();
+    if (!loft.IsDone()) throw std::runtime_error("hom::cad::propeller_model: the blade loft failed");
+    const TopoDS_Shape blade = loft.Shape();
+    for (int k = 0; k < blades; ++k) {
+      gp_Trsf turn;
+      turn.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp::DZ()), 2 * pi * k / blades);
+      BRepAlgoAPI_Fuse fuse(part, BRepBuilderAPI_Transform(blade, turn, true).Shape());
+      if (!fuse.IsDone()) throw std::runtime_error("hom::cad::propeller_model: fusing a blade to the hub failed");
+      part = fuse.Shape();
+    }
+    return part;
+  });
+}
+
+CadModel wing_domain_model(double thickness) {
+  if (!(thickness > 0 && thickness < 0.5))
+    throw std::invalid_argument("hom::cad::wing_domain_model: thickness in (0, 0.5)");
+  return built("wing_domain", [&] {
+    BRepOffsetAPI_ThruSections loft(/*isSolid=*/true, /*ruled=*/false);
+    loft.AddWire(naca_section(thickness, 1.0, 0.0, 0.0));  // root, on the symmetry plane
+    loft.AddWire(naca_section(thickness, 0.6, 0.3, 1.5));  // tip: taper 0.6, leading edge swept back 0.3
+    loft.Build();
+    if (!loft.IsDone()) throw std::runtime_error("hom::cad::wing_domain_model: the wing loft failed");
+    const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(-1.5, -1.5, 0), gp_Pnt(3.0, 1.5, 2.5)).Shape();
+    BRepAlgoAPI_Cut cut(box, loft.Shape());
+    if (!cut.IsDone()) throw std::runtime_error("hom::cad::wing_domain_model: cutting the wing from the box failed");
+    return cut.Shape();
   });
 }
 

@@ -8,6 +8,8 @@
 ///
 ///   auto part = hom::cad::plate_with_holes_model();   // one planar face, z = 0
 ///   auto gear = hom::cad::gear_model();                // extruded toothed wheel
+///   auto prop = hom::cad::propeller_model();           // twisted blades on a hub
+///   auto wing = hom::cad::wing_domain_model();         // box around a half-wing
 
 #include <optional>
 
@@ -33,6 +35,23 @@ CadModel plate_with_holes_model();
 /// along z: one B-spline extrusion face for the teeth, a cylinder for the
 /// bore, two planar faces with a B-spline and a circular boundary.
 CadModel gear_model(int teeth = 12, double radius = 1.0, double thickness = 0.4);
+
+/// A propeller-like part (the propeller of section 5.5.1.3 and table 5.3 is
+/// not public): a cylindrical hub of radius 0.3 and length 0.6 along z, and
+/// `blades` twisted blades along the radial directions, each lofted through
+/// four elliptic sections (thickness 18 % of the chord) from radius 0.15,
+/// inside the hub, to the tip at 1.3, the chord shrinking from 0.5 to 0.22 and
+/// the pitch from 60 to 24 degrees; blades fused to the hub. One solid whose
+/// faces are B-spline loft surfaces, the cylinder and planes.
+CadModel propeller_model(int blades = 3);
+
+/// The exterior domain of a wing (section 6.3.2): a NACA 00tt half-wing
+/// (`thickness` 0.12: NACA 0012) lofted from its root (chord 1, leading edge
+/// at the origin, in the symmetry plane z = 0) to a flat tip at z = 1.5 (chord
+/// 0.6, leading edge swept back by 0.3), cut from the box [-1.5, 3] x [-1.5,
+/// 1.5] x [0, 2.5]. One solid; the wing's upper and lower sides are B-spline
+/// loft surfaces that meet at the leading edge and at the sharp trailing edge.
+CadModel wing_domain_model(double thickness = 0.12);
 
 /// If every face of the model is planar and they lie in one plane, the model
 /// moved rigidly into z = 0 with that plane's normal along +z (a no-op for a
