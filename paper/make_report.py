@@ -1179,7 +1179,8 @@ def write_report(args, meta, runs, reports, out_dir, work, total_s):
         elif tid in MISSING:
             lines += [thesis_only_section(sec, tid, MISSING[tid])]
         else:
-            mode_note = "this table's rows need the full mode, or its run was skipped or failed" if not full else \
+            mode_note = "this table's rows need the full mode (paper/full/report.md has them once its run is made), " \
+                "or its run was skipped or failed" if not full else \
                 "its run was skipped or did not produce these rows"
             lines += [thesis_only_section(sec, tid, "no rows in this report: %s produces this table, "
                                                     "but %s (see the runs above)." % (source, mode_note))]
