@@ -131,9 +131,10 @@ FULL = [
     dict(name="curve_models", binary="bench_curve", args=["--case", "propeller_surface", "--case", "propeller",
                                                           "--case", "wing_domain", "--certify"], timeout=4 * 3600,
          conditions="the propeller-like part and the wing's exterior domain (curve_models.hpp)"),
-    dict(name="curve_cad", binary="bench_curve", args=["--case", "wing_fuselage", "--case", "ring_in_sphere", "--case", "spur_gear", "--case",
-                                                       "gear_face_tri", "--case", "gear_face_quad", "--case",
-                                                       "sphere_rhino", "--case", "t106_cascade", "--certify"],
+    dict(name="curve_cad", binary="bench_curve", args=["--case", "wing_fuselage", "--case", "ring_in_sphere", "--case",
+                                                       "spur_gear", "--case", "gear_face_tri", "--case",
+                                                       "gear_face_quad", "--case", "sphere_rhino", "--case",
+                                                       "t106_cascade", "--certify"],
          timeout=4 * 3600),
     dict(name="boundary_layer_wing", binary="bench_boundary_layer", args=["--case", "wing", "--p", "2"],
          timeout=4 * 3600,
@@ -328,6 +329,12 @@ def git_commit():
 
 def utc_now():
     return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+
+
+def unrun_record(spec, status):
+    """The record of a run that is listed but was not made (skipped, or not run yet)."""
+    return dict(name=spec["name"], binary=spec["binary"], kind=spec.get("kind", "json"), status=status, conditions="",
+                report=None, rc=None, command=spec["binary"] + " " + " ".join(spec["args"]))
 
 
 def run_harness(spec, build, work, log):
@@ -1260,13 +1267,11 @@ def main():
     for spec in specs:
         name = spec["name"]
         if name in skip:
-            rec = dict(name=name, binary=spec["binary"], kind=spec.get("kind", "json"), status="skipped (--skip)",
-                       conditions="", report=None, rc=None, command=spec["binary"] + " " + " ".join(spec["args"]))
+            rec = unrun_record(spec, "skipped (--skip)")
         elif args.no_run or (only and name not in only):
             rec = previous.get(name)
             if not rec:  # listed, so that a partial report shows what it lacks
-                rec = dict(name=name, binary=spec["binary"], kind=spec.get("kind", "json"), report=None, rc=None,
-                           status="not run yet", conditions="", command=spec["binary"] + " " + " ".join(spec["args"]))
+                rec = unrun_record(spec, "not run yet")
         else:
             rec = run_harness(spec, args.build, work, log)
         runs[name] = rec
