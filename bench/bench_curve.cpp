@@ -365,12 +365,19 @@ std::vector<Case> all_cases(const fs::path& data) {
   cases.push_back({"propeller_surface", [] { return hom::cad::propeller_model(); }, Kind::surface_tri, size_20th, {5},
                    {3}, {}});
   cases.push_back({"propeller", [] { return hom::cad::propeller_model(); }, Kind::volume, size_20th, {4}, {2}, {}});
-  // The wing's domain, graded: size 0.2 at the wing's vertices, 0.6 at the box's.
+  // The wing's domain, graded: size 1/30 of the model's at the wing's
+  // vertices, 1/10 at the box's corners (every coordinate at an end of the
+  // bounding box).
   cases.push_back({"wing_domain", [] { return hom::cad::wing_domain_model(); }, Kind::volume,
                    [](const hom::cad::CadModel& m) {
-                     hom::cad::CadMeshOptions o = sized(0.6);
-                     for (int v = 1; v <= m.num_vertices(); ++v)
-                       o.vertex_sizes[v] = std::abs(m.vertex(v).y()) < 0.5 ? 0.2 : 0.6;  // box corners: |y| = 1.5
+                     hom::cad::CadMeshOptions o = sized(m.size() / 10);
+                     const auto [lo, hi] = m.bounding_box();
+                     const double tol = 1e-3 * m.size();  // OpenCASCADE pads its bounding box
+                     for (int v = 1; v <= m.num_vertices(); ++v) {
+                       const Eigen::Vector3d x = m.vertex(v);
+                       const bool corner = ((x - lo).cwiseAbs().array() < tol || (x - hi).cwiseAbs().array() < tol).all();
+                       o.vertex_sizes[v] = corner ? m.size() / 10 : m.size() / 30;
+                     }
                      return o;
                    },
                    {4}, {2}, {}});
