@@ -21,7 +21,7 @@
 
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
-#include "quad_ears.hpp"
+#include "ears.hpp"
 #include "hom/geometry/cylinder.hpp"
 #include "hom/geometry/plane.hpp"
 #include "hom/geometry/sphere.hpp"
@@ -652,6 +652,85 @@ TEST_CASE("a quadrilateral ear (two edges on one curve at a corner) is split int
       CHECK(n.params[0] == doctest::Approx(n.x[0]));
     }
   CHECK(cad::split_quad_ears(d, plane) == 0);  // nothing left to split
+}
+
+TEST_CASE("a triangle ear (two edges on one curve at a corner) is split into three at its centre, conforming") {
+  // Face 1 is the plane z = 0 with (u, v) = (x, y); curve 1 (a parabola)
+  // passes through B = (-1, 0.5), V = (0, 0) and A = (1, 0.5). Triangle
+  // V A B has both edges at V on curve 1: an ear. Triangle A C B, C = (0, 1.5),
+  // shares its edge A-B and has no edge on the curve. With V on the vertex
+  // of closed curve 1, V A B is still an ear; with V on a vertex where curve
+  // 2 (the edge B-V) meets curve 1, nothing is.
+  for (const int v_dim : {1, 0, -1}) {
+    CAPTURE(v_dim);
+    io::MshData d;
+    const std::vector<std::array<double, 3>> x = {{0, 0, 0}, {1, 0.5, 0}, {-1, 0.5, 0}, {0, 1.5, 0}};
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      io::MshNode n;
+      n.tag = std::int64_t(i) + 1;
+      n.x = x[i];
+      const bool on_curve = i < 3;
+      n.entity = EntityId{i == 0 ? std::max(v_dim, 0) : on_curve ? 1 : 2, 1};
+      n.num_params = on_curve ? 1 : 2;
+      n.params = {x[i][0], x[i][1], 0.0};
+      d.nodes.push_back(n);
+    }
+    auto add = [&](int type, int dim, std::vector<std::int64_t> nodes) {
+      io::MshElement e;
+      e.tag = std::int64_t(d.elements.size()) + 1;
+      e.type = type;
+      e.entity = {dim, 1};
+      e.first = d.element_nodes.size();
+      e.num_nodes = int(nodes.size());
+      d.element_nodes.insert(d.element_nodes.end(), nodes.begin(), nodes.end());
+      d.elements.push_back(e);
+    };
+    add(1, 1, {3, 1});
+    add(1, 1, {1, 2});
+    if (v_dim < 0) d.elements[0].entity.tag = 2;
+    add(2, 2, {1, 2, 3});
+    add(2, 2, {2, 4, 3});
+    const cad::FaceGeometry plane{[](int, const Eigen::Vector3d& p) { return Eigen::Vector2d(p.x(), p.y()); },
+                                  [](int, const Eigen::Vector2d& uv) { return Eigen::Vector3d(uv.x(), uv.y(), 0.0); }};
+    if (v_dim < 0) {
+      CHECK(cad::split_triangle_ears(d, plane) == 0);
+      CHECK(d.elements.size() == 4);
+      continue;
+    }
+    CHECK(cad::split_triangle_ears(d, plane) == 1);
+    REQUIRE(d.nodes.size() == 5);
+    const auto& centre = d.nodes.back();
+    CHECK(centre.x[0] == doctest::Approx(0.0));
+    CHECK(centre.x[1] == doctest::Approx(1.0 / 3));
+    REQUIRE(centre.entity);
+    CHECK(centre.entity->dim == 2);
+    CHECK(centre.num_params == 2);
+    CHECK(centre.params[1] == doctest::Approx(1.0 / 3));
+    std::map<std::int64_t, Eigen::Vector2d> at;
+    for (const auto& n : d.nodes) at[n.tag] = Eigen::Vector2d(n.x[0], n.x[1]);
+    std::set<std::int64_t> tags;
+    std::map<std::pair<std::int64_t, std::int64_t>, int> edge_uses;
+    int triangles = 0, at_ear_corner = 0;
+    for (const auto& e : d.elements) {
+      CHECK(tags.insert(e.tag).second);  // element tags stay unique
+      if (e.type != 2) continue;
+      ++triangles;
+      const auto n = d.nodes_of(e);
+      const Eigen::Vector2d a = at.at(n[0]), b = at.at(n[1]), c = at.at(n[2]);
+      CHECK((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() > 0.0);  // the input's winding
+      for (int i = 0; i < 3; ++i) ++edge_uses[{std::min(n[i], n[(i + 1) % 3]), std::max(n[i], n[(i + 1) % 3])}];
+      if (std::find(n.begin(), n.end(), 1) != n.end()) ++at_ear_corner;
+    }
+    CHECK(triangles == 4);      // A C B and the three of the ear
+    CHECK(at_ear_corner == 2);  // V now has an edge to the centre
+    int boundary = 0;
+    for (const auto& [edge, uses] : edge_uses) {
+      CHECK(uses <= 2);
+      boundary += uses == 1;
+    }
+    CHECK(boundary == 4);  // the outline V A C B is unchanged
+    CHECK(cad::split_triangle_ears(d, plane) == 0);
+  }
 }
 
 TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {

@@ -19,7 +19,7 @@
 #include "gmsh_model.hpp"
 #include "meshing_error.hpp"
 #include "occ_data.hpp"
-#include "quad_ears.hpp"
+#include "ears.hpp"
 
 namespace hom::cad {
 
@@ -381,10 +381,13 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   for (auto& e : d.elements)
     if (!remap(e.entity))
       throw MeshingError(cad.name() + ": mesh element " + std::to_string(e.tag) + " is on an unmatched Gmsh entity");
-  if (o.quads && o.dim == 2) {
+  if (o.dim == 2 && (o.quads || o.split_triangle_ears)) {
     const FaceGeometry faces{[&](int f, const Eigen::Vector3d& x) { return geometry.surface(f)->project(x); },
                              [&](int f, const Eigen::Vector2d& uv) { return geometry.surface(f)->evaluate(uv); }};
-    split_quad_ears(d, faces);
+    if (o.quads)
+      split_quad_ears(d, faces);
+    else
+      split_triangle_ears(d, faces);
   }
   if (!o.solids.empty()) keep_entities(d, solid_closure(cad, o.solids));
   return d;

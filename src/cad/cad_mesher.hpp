@@ -56,6 +56,10 @@ class MeshingError : public std::runtime_error {
 struct CadMeshOptions {
   int dim = 3;                   ///< 3: tetrahedra of the solids; 2: triangles / quads of the faces
   bool quads = false;            ///< 2D: recombine into quadrilaterals (Mesh.RecombineAll)
+  /// 2D triangles: split the ears (ears.hpp; quadrilateral ears are always
+  /// split). mesh_cad sets it for surface meshes; a planar mesh's are split
+  /// by the curving pipeline (hom/mesh/flat_corners.hpp).
+  bool split_triangle_ears = false;
   double size = 0.0;             ///< Mesh.MeshSizeMax; 0: the model's bounding-box diagonal / 20
   double size_min = 0.0;         ///< Mesh.MeshSizeMin
   int size_from_curvature = 0;   ///< Mesh.MeshSizeFromCurvature: elements per 2 pi radians; 0: off
@@ -86,6 +90,7 @@ template <ElementFamily Family, NodeSet Nodes = WarpBlend, int SpaceDim = Family
 Mesh<Family, Nodes, SpaceDim> mesh_cad(const CadModel& cad, CadMeshOptions options = {}) {
   options.dim = Family::dim;
   options.quads = !Family::is_simplex;
+  options.split_triangle_ears = Family::is_simplex && Family::dim == 2 && SpaceDim == 3;
   if constexpr (Family::dim == 3) static_assert(Family::is_simplex, "hom::cad::mesh_cad: volume meshes are tetrahedral");
   return io::to_mesh<Family, Nodes, SpaceDim>(cad_mesh_data(cad, options));
 }

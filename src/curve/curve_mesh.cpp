@@ -140,7 +140,7 @@ class Pipeline {
   /// a simplex whose edges at a corner all lie on one CAD face (curve in 2D)
   /// would have det = 0 there once curved, which no optimization of the
   /// interior can mend. Surface meshes and quadrilaterals are left as they
-  /// are (the latter's ears are split by the mesher, src/cad/quad_ears.hpp).
+  /// are (the mesher splits their ears, src/cad/ears.hpp).
   MeshT without_flat_corners(const MeshT& linear, FlatCornerSplit& s) {
     MeshT out = linear;
     if constexpr (Family::is_simplex && !surface) {

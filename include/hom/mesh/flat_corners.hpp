@@ -29,8 +29,8 @@
 /// Afterwards every corner of the new elements has an edge to the new,
 /// interior node, so none is flat; the boundary facets keep their vertices
 /// (the split edge is on none; a centroid split keeps the facets). The
-/// quadrilateral analogue, for the 2D meshes from CAD, is
-/// src/cad/quad_ears.hpp.
+/// analogue for quadrilaterals and surface triangles, whose corners on a
+/// curve the mesher splits, is src/cad/ears.hpp.
 
 #include <algorithm>
 #include <cmath>

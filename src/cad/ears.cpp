@@ -1,0 +1,169 @@
+// Ears of a linear 2D mesh from CAD (see ears.hpp).
+#include "ears.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <span>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace hom::cad {
+
+namespace {
+
+constexpr int gmsh_line = 1;
+constexpr int gmsh_triangle = 2;
+constexpr int gmsh_quad = 3;
+
+using Edge = std::pair<std::int64_t, std::int64_t>;
+
+Edge edge_key(std::int64_t a, std::int64_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
+
+/// What both splits share: the curve of each boundary line, node lookup, new
+/// nodes on a face, and the rebuilt element list.
+class EarSplitter {
+ public:
+  EarSplitter(io::MshData& d, const FaceGeometry& faces) : d_(d), faces_(faces) {
+    for (const auto& e : d.elements) {
+      next_element_ = std::max(next_element_, e.tag + 1);
+      if (e.type == gmsh_line && e.entity.dim == 1) {
+        const auto n = d.nodes_of(e);
+        curve_of_[edge_key(n[0], n[1])] = e.entity.tag;
+      }
+    }
+    for (std::size_t i = 0; i < d.nodes.size(); ++i) {
+      index_[d.nodes[i].tag] = i;
+      next_node_ = std::max(next_node_, d.nodes[i].tag + 1);
+    }
+    elements_.reserve(d.elements.size());
+  }
+
+  /// The corner of the element with these corner nodes (in order around it)
+  /// that is an ear's, or -1: both edges there on one curve. The corner is on
+  /// that curve, or on its vertex if it is closed (a periodic curve is as
+  /// smooth there as anywhere; at a kink the split only adds a node).
+  template <std::size_t N>
+  int ear_corner(const std::array<std::int64_t, N>& corners) const {
+    for (std::size_t i = 0; i < N; ++i) {
+      const auto before = curve_of_.find(edge_key(corners[i], corners[(i + N - 1) % N]));
+      const auto after = curve_of_.find(edge_key(corners[i], corners[(i + 1) % N]));
+      if (before != curve_of_.end() && after != curve_of_.end() && before->second == after->second) return int(i);
+    }
+    return -1;
+  }
+
+  Eigen::Vector3d position(std::int64_t tag) const {
+    const auto& x = d_.nodes[index_.at(tag)].x;
+    return Eigen::Vector3d(x[0], x[1], x[2]);
+  }
+
+  /// A new node of face `face` at the projection of y, with its (u, v).
+  std::int64_t face_node(int face, const Eigen::Vector3d& y) {
+    const Eigen::Vector2d uv = faces_.project(face, y);
+    const Eigen::Vector3d x = faces_.evaluate(face, uv);
+    io::MshNode node;
+    node.tag = next_node_++;
+    node.x = {x[0], x[1], x[2]};
+    node.entity = EntityId{2, face};
+    node.num_params = 2;
+    node.params = {uv[0], uv[1], 0.0};
+    index_[node.tag] = d_.nodes.size();
+    d_.nodes.push_back(node);
+    return node.tag;
+  }
+
+  /// Appends an element like `e` with these nodes; the first piece of a
+  /// split element keeps its tag, the others get new ones.
+  void add(io::MshElement e, std::span<const std::int64_t> nodes, bool new_tag = false) {
+    if (new_tag) e.tag = next_element_++;
+    e.first = element_nodes_.size();
+    e.num_nodes = int(nodes.size());
+    element_nodes_.insert(element_nodes_.end(), nodes.begin(), nodes.end());
+    elements_.push_back(e);
+  }
+
+  /// Replaces d's elements with those added.
+  void finish() {
+    d_.elements = std::move(elements_);
+    d_.element_nodes = std::move(element_nodes_);
+  }
+
+ private:
+  io::MshData& d_;
+  const FaceGeometry& faces_;
+  std::map<Edge, int> curve_of_;
+  std::unordered_map<std::int64_t, std::size_t> index_;
+  std::int64_t next_node_ = 0, next_element_ = 0;
+  std::vector<io::MshElement> elements_;
+  std::vector<std::int64_t> element_nodes_;
+};
+
+/// Runs split(splitter, element, corners, ear corner) on every ear of type `type` (N
+/// corners) on a face, keeps the other elements; returns the ears split.
+template <std::size_t N, class Split>
+int split_ears(io::MshData& d, const FaceGeometry& faces, int type, Split&& split) {
+  EarSplitter s(d, faces);
+  int ears = 0;
+  for (const auto& e : d.elements) {
+    const auto n = d.nodes_of(e);
+    int ear = -1;
+    std::array<std::int64_t, N> corners{};
+    if (e.type == type && e.entity.dim == 2) {
+      std::copy(n.begin(), n.end(), corners.begin());
+      ear = s.ear_corner(corners);
+    }
+    if (ear < 0) {
+      s.add(e, n);
+      continue;
+    }
+    split(s, e, corners, ear);
+    ++ears;
+  }
+  s.finish();
+  return ears;
+}
+
+/// A quadrilateral ear into five: inner corners halfway to the centre, on
+/// the face, the ear corner's a quarter of the way (it is nearly on the line
+/// of its two neighbours, so halfway would put the inner quad's corner on
+/// the line of theirs); the four around the inner quad, each on one of the
+/// ear's edges, then the inner one, all with the ear's winding.
+void split_quad_ear(EarSplitter& s, const io::MshElement& e, const std::array<std::int64_t, 4>& q, int ear) {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (auto t : q) centre += 0.25 * s.position(t);
+  std::array<std::int64_t, 4> inner{};
+  for (int i = 0; i < 4; ++i) {
+    const double to_centre = i == ear ? 0.25 : 0.5;
+    inner[i] = s.face_node(e.entity.tag, s.position(q[i]) + to_centre * (centre - s.position(q[i])));
+  }
+  for (int i = 0; i < 4; ++i) {
+    const std::array<std::int64_t, 4> around{q[i], q[(i + 1) % 4], inner[(i + 1) % 4], inner[i]};
+    s.add(e, around, i > 0);
+  }
+  s.add(e, inner, true);
+}
+
+/// A triangle ear into three around its centre, projected onto the face.
+void split_triangle_ear(EarSplitter& s, const io::MshElement& e, const std::array<std::int64_t, 3>& t, int) {
+  const Eigen::Vector3d centre = (s.position(t[0]) + s.position(t[1]) + s.position(t[2])) / 3;
+  const std::int64_t c = s.face_node(e.entity.tag, centre);
+  for (int i = 0; i < 3; ++i) {
+    const std::array<std::int64_t, 3> piece{t[i], t[(i + 1) % 3], c};
+    s.add(e, piece, i > 0);
+  }
+}
+
+}  // namespace
+
+int split_quad_ears(io::MshData& d, const FaceGeometry& faces) {
+  return split_ears<4>(d, faces, gmsh_quad, split_quad_ear);
+}
+
+int split_triangle_ears(io::MshData& d, const FaceGeometry& faces) {
+  return split_ears<3>(d, faces, gmsh_triangle, split_triangle_ear);
+}
+
+}  // namespace hom::cad
