@@ -581,6 +581,23 @@ TEST_CASE("surface meshes of the NURBS sphere: triangles and quadrilaterals on t
   check(cad::mesh_cad<Cube<2>, GaussLobatto, 3>(m, o));
 }
 
+namespace {
+
+// Appends an element of Gmsh type `type` on entity (dim, tag) to d, tagged
+// after the last one.
+void add_msh_element(io::MshData& d, int type, int dim, int tag, const std::vector<std::int64_t>& nodes) {
+  io::MshElement e;
+  e.tag = std::int64_t(d.elements.size()) + 1;
+  e.type = type;
+  e.entity = {dim, tag};
+  e.first = d.element_nodes.size();
+  e.num_nodes = int(nodes.size());
+  d.element_nodes.insert(d.element_nodes.end(), nodes.begin(), nodes.end());
+  d.elements.push_back(e);
+}
+
+}  // namespace
+
 TEST_CASE("a quadrilateral ear (two edges on one curve at a corner) is split into five, conforming, same winding") {
   // Face 1 is the plane z = 0 with (u, v) = (x, y); curve 1 runs along y = 0.
   // Quad A = (0,0) (1,0) (0,1) (-1,0) has both edges at (0,0) on curve 1: an
@@ -598,16 +615,7 @@ TEST_CASE("a quadrilateral ear (two edges on one curve at a corner) is split int
     n.params = {x[i][0], x[i][1], 0.0};
     d.nodes.push_back(n);
   }
-  auto add = [&](int type, int dim, std::vector<std::int64_t> nodes) {
-    io::MshElement e;
-    e.tag = std::int64_t(d.elements.size()) + 1;
-    e.type = type;
-    e.entity = {dim, 1};
-    e.first = d.element_nodes.size();
-    e.num_nodes = int(nodes.size());
-    d.element_nodes.insert(d.element_nodes.end(), nodes.begin(), nodes.end());
-    d.elements.push_back(e);
-  };
+  auto add = [&](int type, int dim, std::vector<std::int64_t> nodes) { add_msh_element(d, type, dim, 1, nodes); };
   for (auto [a, b] : {std::pair{4, 1}, std::pair{1, 2}, std::pair{2, 5}}) add(1, 1, {a, b});
   add(3, 2, {1, 2, 3, 4});
   add(3, 2, {2, 5, 6, 3});
@@ -675,16 +683,7 @@ TEST_CASE("a triangle ear (two edges on one curve at a corner) is split into thr
       n.params = {x[i][0], x[i][1], 0.0};
       d.nodes.push_back(n);
     }
-    auto add = [&](int type, int dim, std::vector<std::int64_t> nodes) {
-      io::MshElement e;
-      e.tag = std::int64_t(d.elements.size()) + 1;
-      e.type = type;
-      e.entity = {dim, 1};
-      e.first = d.element_nodes.size();
-      e.num_nodes = int(nodes.size());
-      d.element_nodes.insert(d.element_nodes.end(), nodes.begin(), nodes.end());
-      d.elements.push_back(e);
-    };
+    auto add = [&](int type, int dim, std::vector<std::int64_t> nodes) { add_msh_element(d, type, dim, 1, nodes); };
     add(1, 1, {3, 1});
     add(1, 1, {1, 2});
     if (v_dim < 0) d.elements[0].entity.tag = 2;
