@@ -16,10 +16,10 @@
 #include <Bnd_Box.hxx>
 #include <TopoDS.hxx>
 
+#include "ears.hpp"
 #include "gmsh_model.hpp"
 #include "meshing_error.hpp"
 #include "occ_data.hpp"
-#include "ears.hpp"
 
 namespace hom::cad {
 
