@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -607,4 +608,125 @@ TEST_CASE("split_flat_corners: corners on several nearly coplanar patches are fl
 
   // The same with the poles at +-1: the faces meet at 70 degrees, a crease.
   CHECK(find_flat_corners(octahedron(1.0, own_surface)).empty());
+}
+
+TEST_CASE("split_flat_corners: corners on surfaces tangent to each other are flat, whatever their facets") {
+  // The octahedron with poles at +-1, every face on a surface of its own:
+  // its straight facets meet at 70 degrees around each equatorial vertex, a
+  // crease by the facets alone (see above). If the surfaces are tangent to
+  // each other there (a fillet's tangent seam, narrower than the elements),
+  // the curved edges all end in one tangent plane and the corner is flat.
+  auto own_surface = [](int i, int pole) { return 1 + 2 * i + pole; };
+  const auto mesh = octahedron(1.0, own_surface);
+  std::set<int> asked;
+  const EntityNormal<3> tangent = [&](int, int node) -> std::optional<Eigen::Vector3d> {
+    asked.insert(node);
+    return Eigen::Vector3d(0, 0, node % 2 ? 1 : -1);  // one tangent plane, either orientation
+  };
+  const auto corners = find_flat_corners(mesh, tangent);
+  CHECK(corners.size() == 8);  // both equatorial corners of each tetrahedron
+  for (const auto& c : corners) CHECK(mesh.vertex(c.element, c.vertex) >= 2);
+  CHECK(asked.count(2) + asked.count(3) + asked.count(4) + asked.count(5) == 4);  // asked at the corners' nodes
+
+  // Normals 80 degrees apart (upper and lower surfaces): a crease again.
+  const EntityNormal<3> crease = [](int tag, int) -> std::optional<Eigen::Vector3d> {
+    const double t = (tag % 2 ? 40.0 : -40.0) * std::acos(-1.0) / 180.0;
+    return Eigen::Vector3d(std::sin(t), 0, std::cos(t));
+  };
+  CHECK(find_flat_corners(mesh, crease).empty());
+  // No normal at a singular point: the facets decide.
+  const EntityNormal<3> none = [](int, int) -> std::optional<Eigen::Vector3d> { return std::nullopt; };
+  CHECK(find_flat_corners(mesh, none).empty());
+
+  auto split = mesh;
+  const auto s = split_flat_corners(split, tangent);
+  CHECK(s.corners == 8);
+  CHECK(s.edges_split == 1);  // the axis
+  CHECK(split.num_elements() == 8);
+  CHECK(find_flat_corners(split, tangent).empty());
+  check_facet_owners(split);
+}
+
+TEST_CASE("split_flat_corners: a straight corner (two boundary edges opposite in one tangent plane) is split") {
+  // Where an edge spans a fillet narrower than the elements and the next
+  // continues on the face beyond its seam, the two curved edges end
+  // antiparallel at the seam node: a straight angle, det D phi = 0.
+  // The mesh: a bipyramid around the interior edge b-c (ring a, r1, r2, r3)
+  // and two tetrahedra (a, b, r1, s), (a, c, r1, s) outside its faces at
+  // a-r1, which makes a-r1 interior. At a, the edges a-b and a-c are on the
+  // boundary, a-r1 is interior: the tetrahedron (b, c, a, r1) has a straight
+  // corner at a for the normal (0, 0, -1), which bisects the chords.
+  Eigen::Matrix3Xd x(3, 7);
+  x << 0, -1, 1, 0, 0, 0, 0,  // a b c r1 r2 r3 s
+      0, 0, 0, 1, 0, -1, 1,   //
+      1, 0, 0, 0, -1, 0, 1;
+  const int node = 0, r1 = 3, s_apex = 6;
+  std::vector<std::array<int, 4>> tets = {{1, 2, 0, 3}, {1, 2, 3, 4}, {1, 2, 4, 5}, {1, 2, 5, 0},
+                                          {0, 1, r1, s_apex}, {0, 2, r1, s_apex}};
+  Eigen::MatrixXi t(4, tets.size());
+  for (std::size_t e = 0; e < tets.size(); ++e) {
+    Eigen::Matrix3d j;
+    for (int k = 0; k < 3; ++k) j.col(k) = x.col(tets[e][k + 1]) - x.col(tets[e][0]);
+    if (j.determinant() < 0) std::swap(tets[e][0], tets[e][1]);
+    for (int k = 0; k < 4; ++k) t(k, e) = tets[e][k];
+  }
+  Mesh<Simplex<3>> mesh(1, x, t);
+  std::map<std::vector<int>, int> face_count;
+  for (const auto& tet : tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      std::vector<int> f;
+      for (int k = 0; k < 4; ++k)
+        if (k != skip) f.push_back(tet[k]);
+      std::sort(f.begin(), f.end());
+      ++face_count[f];
+    }
+  std::vector<std::pair<std::vector<int>, int>> facets;  // each on a surface of its own
+  for (const auto& [f, count] : face_count)
+    if (count == 1) facets.push_back({f, int(facets.size()) + 1});
+  add_boundary_facets(mesh, facets);
+  const auto on_boundary = detail::boundary_edge_facets(mesh);
+  auto boundary = [&](int i, int j) { return on_boundary.count(detail::mesh_edge(i, j)) > 0; };
+  REQUIRE(boundary(node, 1));
+  REQUIRE(boundary(node, 2));
+  REQUIRE(!boundary(node, r1));
+  REQUIRE(!boundary(1, 2));
+  const Eigen::Vector3d n(0, 0, -1);
+  const EntityNormal<3> fillet = [&](int, int i) -> std::optional<Eigen::Vector3d> {
+    if (i == node) return n;
+    return std::nullopt;
+  };
+  CHECK(find_flat_corners(mesh).empty());
+  const auto corners = find_flat_corners(mesh, fillet);
+  REQUIRE(!corners.empty());
+  int straight = 0;
+  for (const auto& c : corners) {
+    CHECK(mesh.vertex(c.element, c.vertex) == node);
+    if (c.split_from < 0) {  // a flat corner: all three edges on the boundary
+      for (int b = 0; b < 4; ++b)
+        if (b != c.vertex) CHECK(boundary(node, mesh.vertex(c.element, b)));
+      continue;
+    }
+    ++straight;
+    const Eigen::Vector3d x = mesh.node(node);
+    auto in_plane = [&](int local) {
+      const Eigen::Vector3d d = mesh.node(mesh.vertex(c.element, local)) - x;
+      return Eigen::Vector3d(d - d.dot(n) * n).normalized();
+    };
+    CHECK(in_plane(c.split_from).dot(in_plane(c.split_to)) < -0.86);
+    CHECK(!boundary(mesh.vertex(c.element, c.split_from), mesh.vertex(c.element, c.split_to)));
+  }
+  CHECK(straight >= 1);
+  const int before = mesh.num_elements();
+  const auto s = split_flat_corners(mesh, fillet);
+  CHECK(s.edges_split >= 1);
+  CHECK(mesh.num_elements() > before);
+  CHECK(find_flat_corners(mesh, fillet).empty());
+  double volume = 0;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    CHECK(signed_volume(mesh, e) > 0);
+    volume += signed_volume(mesh, e) / 6;
+  }
+  CHECK(volume == doctest::Approx(4.0 / 3.0 + 2.0 / 6.0));  // the octahedron and the two outer tetrahedra
+  CHECK(mesh.boundary_facets().size() == facets.size());
+  check_facet_owners(mesh);
 }

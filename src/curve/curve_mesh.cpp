@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -136,21 +137,46 @@ class Pipeline {
     for (int f = 1; f <= cad.num_faces(); ++f) surfaces_.emplace(f, cad.surface(f));
   }
 
+  /// The unit normal of CAD face `tag` (curve in 2D) at its closest point
+  /// to node `node` of `mesh`; empty where the parameterization is singular
+  /// (a pole, an apex) or the entity is not in the model.
+  std::optional<Eigen::Matrix<double, SpaceDim, 1>> entity_normal(const MeshT& mesh, int tag, int node) const {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    x.template head<SpaceDim>() = mesh.node(node);
+    if constexpr (SpaceDim == 3) {
+      const auto it = surfaces_.find(tag);
+      if (it == surfaces_.end()) return std::nullopt;
+      const auto d = it->second.derivatives(it->second.project(x));
+      const Eigen::Vector3d n = d.col(0).cross(d.col(1));
+      if (n.norm() <= 1e-12 * d.col(0).norm() * d.col(1).norm()) return std::nullopt;
+      return n.normalized();
+    } else {
+      const auto it = curves_.find(tag);
+      if (it == curves_.end()) return std::nullopt;
+      const Eigen::Vector3d t = it->second.derivative(it->second.project(x));
+      if (t.head<2>().norm() == 0.0) return std::nullopt;
+      return Eigen::Vector2d(-t[1], t[0]).normalized();
+    }
+  }
+
   /// The linear mesh with its flat corners split (mesh/flat_corners.hpp):
-  /// a simplex whose edges at a corner all lie on one CAD face (curve in 2D)
-  /// would have det = 0 there once curved, which no optimization of the
-  /// interior can mend. Surface meshes and quadrilaterals are left as they
-  /// are (the mesher splits their ears, src/cad/ears.hpp).
+  /// a simplex whose edges at a corner all lie on one CAD face (curve in 2D),
+  /// or on faces tangent to each other there (a fillet's seam), would have
+  /// det = 0 there once curved, which no optimization of the interior can
+  /// mend. Surface meshes and quadrilaterals are left as they are (the mesher
+  /// splits their ears, src/cad/ears.hpp).
   MeshT without_flat_corners(const MeshT& linear, FlatCornerSplit& s) {
     MeshT out = linear;
     if constexpr (Family::is_simplex && !surface) {
       if (!o_.split_flat_corners) return out;
-      s = split_flat_corners(out);
+      s = split_flat_corners(out, EntityNormal<SpaceDim>([&](int tag, int node) {
+                               return entity_normal(out, tag, node);  // the mesh of the current pass
+                             }));
       if (s.corners > 0)
         say("linear mesh: " + std::to_string(s.corners) + " flat corners (every edge there on one CAD " +
-            (volume ? "face" : "curve") + ", or on nearly coplanar ones): " + std::to_string(s.edges_split) + " interior edges split, " +
-            std::to_string(s.centroid_splits) + " elements split at their centroid; " +
-            std::to_string(out.num_elements()) + " elements");
+            (volume ? "face" : "curve") + ", or on nearly coplanar or tangent ones): " +
+            std::to_string(s.edges_split) + " interior edges split, " + std::to_string(s.centroid_splits) +
+            " elements split at their centroid; " + std::to_string(out.num_elements()) + " elements");
     }
     return out;
   }

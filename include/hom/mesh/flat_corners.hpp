@@ -33,8 +33,9 @@
 /// curve the mesher splits, is src/cad/ears.hpp.
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -84,11 +85,26 @@ Eigen::Matrix<double, D, 1> facet_normal(const Mesh<Simplex<D>, Nodes, D>& mesh,
 /// boundary facets of several entities that are within
 /// `flat_corner_max_angle` of coplanar there (patches of one smooth surface,
 /// such as the two halves of a wing's leading edge; `entity` is then one of
-/// them).
+/// them), or on entities whose geometry has one tangent plane (line) there
+/// (EntityNormal: faces meeting tangentially, as a fillet meets the faces it
+/// rounds; `entity` is then one of them).
+///
+/// A straight corner (tetrahedra, with EntityNormal): two edges from vertex
+/// `vertex` lie on the boundary, on entities with one tangent plane there,
+/// and point to opposite sides in it (their chords projected onto the plane
+/// are within flat_corner_max_angle of antiparallel). Curved, both end
+/// tangent to the plane, antiparallel, so det D phi = 0 at the corner (the
+/// element's angle there is 180 degrees), whatever its third edge does. This
+/// happens where an element's edge spans a fillet narrower than the elements
+/// and its neighbour continues on the face beyond the fillet's seam. Local
+/// vertices `split_from` and `split_to` are the two edges' other ends: the
+/// edge between them, interior, is the one to split.
 struct FlatCorner {
   int element = 0;
   int vertex = 0;
   int entity = 0;
+  int split_from = -1;  ///< straight corners only (see above); -1 otherwise
+  int split_to = -1;
 };
 
 /// The largest angle between the straight boundary facets around a corner
@@ -98,10 +114,86 @@ struct FlatCorner {
 /// interior node.
 inline constexpr double flat_corner_max_angle = 0.5235987755982988;
 
+/// The unit normal of boundary entity `entity` (a CAD face in 3D, a curve in
+/// 2D) at mesh node `node`, from the geometry the mesh discretizes (either
+/// orientation); empty where there is none (a pole, a cone's apex). With it,
+/// a corner whose edges lie on several entities is flat also when the
+/// entities' normals there are within flat_corner_max_angle, however far
+/// apart the straight facets' normals are: across a fillet narrower than the
+/// elements the facets meet at a wide angle, yet the curved edges all end
+/// tangent to the fillet's tangent plane at a node on its tangent seam.
+template <int D>
+using EntityNormal = std::function<std::optional<Eigen::Matrix<double, D, 1>>(int entity, int node)>;
+
+namespace detail {
+
+/// Whether the unit vectors are pairwise within the angle whose cosine is
+/// min_cos of parallel (either orientation).
+template <int D>
+bool nearly_parallel(const std::vector<Eigen::Matrix<double, D, 1>>& normals, double min_cos) {
+  for (std::size_t i = 0; i < normals.size(); ++i)
+    for (std::size_t j = i + 1; j < normals.size(); ++j)
+      if (std::abs(normals[i].dot(normals[j])) < min_cos) return false;
+  return true;
+}
+
+/// Whether the entities of the facets `around` have nearly parallel normals
+/// at mesh node `node` (false where one has none).
+template <int D>
+bool entities_tangent(const std::vector<BoundaryFacet<Simplex<D>>>& facets, const std::vector<int>& around, int node,
+                      const EntityNormal<D>& normal, double min_cos) {
+  std::vector<int> entities;
+  for (int k : around) entities.push_back(facets[k].entity_tag);
+  std::sort(entities.begin(), entities.end());
+  entities.erase(std::unique(entities.begin(), entities.end()), entities.end());
+  std::vector<Eigen::Matrix<double, D, 1>> normals;
+  for (int t : entities) {
+    const auto n = normal(t, node);
+    if (!n) return false;
+    normals.push_back(*n);
+  }
+  return nearly_parallel(normals, min_cos);
+}
+
+/// The straight corner at vertex a of tetrahedron e (see FlatCorner), if it
+/// has one whose opposite edge is interior.
+template <NodeSet Nodes>
+std::optional<FlatCorner> straight_corner(const Mesh<Simplex<3>, Nodes, 3>& mesh, int e, int a,
+                                          const std::map<MeshEdge, std::vector<int>>& on_boundary,
+                                          const EntityNormal<3>& normal, double min_cos) {
+  const auto& facets = mesh.boundary_facets();
+  const int node = mesh.vertex(e, a);
+  std::vector<int> ends, around;  // local vertices b with a-b on the boundary, their facets
+  for (int b = 0; b <= 3; ++b) {
+    if (b == a) continue;
+    const auto it = on_boundary.find(mesh_edge(node, mesh.vertex(e, b)));
+    if (it == on_boundary.end()) continue;
+    ends.push_back(b);
+    around.insert(around.end(), it->second.begin(), it->second.end());
+  }
+  if (ends.size() < 2 || !entities_tangent(facets, around, node, normal, min_cos)) return std::nullopt;
+  const Eigen::Vector3d n = *normal(facets[around.front()].entity_tag, node);
+  auto in_plane = [&](int b) -> Eigen::Vector3d {
+    const Eigen::Vector3d chord = mesh.node(mesh.vertex(e, b)) - mesh.node(node);
+    return (chord - chord.dot(n) * n).normalized();
+  };
+  for (std::size_t i = 0; i < ends.size(); ++i)
+    for (std::size_t j = i + 1; j < ends.size(); ++j) {
+      const int b = ends[i], c = ends[j];
+      if (on_boundary.count(mesh_edge(mesh.vertex(e, b), mesh.vertex(e, c)))) continue;
+      if (in_plane(b).dot(in_plane(c)) <= -min_cos) return FlatCorner{e, a, facets[around.front()].entity_tag, b, c};
+    }
+  return std::nullopt;
+}
+
+}  // namespace detail
+
 /// The flat corners of a linear simplex mesh (planar triangles or
-/// tetrahedra), from its boundary facets and their entity tags.
+/// tetrahedra), from its boundary facets and their entity tags, and from the
+/// entities' normals where `normal` is given.
 template <int D, NodeSet Nodes>
-std::vector<FlatCorner> find_flat_corners(const Mesh<Simplex<D>, Nodes, D>& mesh) {
+std::vector<FlatCorner> find_flat_corners(const Mesh<Simplex<D>, Nodes, D>& mesh,
+                                          const EntityNormal<D>& normal = {}) {
   const auto on_boundary = detail::boundary_edge_facets(mesh);
   const auto& facets = mesh.boundary_facets();
   const double min_cos = std::cos(flat_corner_max_angle);
@@ -129,17 +221,21 @@ std::vector<FlatCorner> find_flat_corners(const Mesh<Simplex<D>, Nodes, D>& mesh
         else
           std::erase_if(*common, [&](int t) { return std::find(tags.begin(), tags.end(), t) == tags.end(); });
       }
-      if (!all_on_boundary) continue;
+      if (!all_on_boundary) {
+        if constexpr (D == 3)
+          if (normal)
+            if (const auto c = detail::straight_corner(mesh, e, a, on_boundary, normal, min_cos)) out.push_back(*c);
+        continue;
+      }
       if (!common->empty()) {
         out.push_back({e, a, common->front()});
         continue;
       }
-      bool coplanar = true;
-      for (std::size_t i = 0; i < around.size() && coplanar; ++i)
-        for (std::size_t j = i + 1; j < around.size() && coplanar; ++j)
-          coplanar = std::abs(detail::facet_normal(mesh, facets[around[i]])
-                                  .dot(detail::facet_normal(mesh, facets[around[j]]))) >= min_cos;
-      if (coplanar) out.push_back({e, a, facets[around.front()].entity_tag});
+      std::vector<Eigen::Matrix<double, D, 1>> facet_normals;
+      for (int k : around) facet_normals.push_back(detail::facet_normal(mesh, facets[k]));
+      if (detail::nearly_parallel(facet_normals, min_cos) ||
+          (normal && detail::entities_tangent(facets, around, mesh.vertex(e, a), normal, min_cos)))
+        out.push_back({e, a, facets[around.front()].entity_tag});
     }
   return out;
 }
@@ -151,18 +247,18 @@ struct FlatCornerSplit {
   int centroid_splits = 0; ///< elements split at their centroid (each adds one node)
 };
 
-/// Splits edges until no element has a flat corner (see above). The mesh
-/// must be linear; new nodes are free (interior), classified on the split
-/// elements' entity; the ideal becomes the new straight-sided mesh.
+namespace detail {
+
+/// One pass of split_flat_corners: every corner found at its start.
 template <int D, NodeSet Nodes>
-FlatCornerSplit split_flat_corners(Mesh<Simplex<D>, Nodes, D>& mesh) {
+FlatCornerSplit split_flat_corners_once(Mesh<Simplex<D>, Nodes, D>& mesh, const EntityNormal<D>& normal) {
   using Family = Simplex<D>;
   using MeshT = Mesh<Family, Nodes, D>;
   if (mesh.degree() != 1)
     throw std::invalid_argument("hom::split_flat_corners: the mesh must be linear, it has degree " +
                                 std::to_string(mesh.degree()));
   FlatCornerSplit out;
-  const auto corners = find_flat_corners(mesh);
+  const auto corners = find_flat_corners(mesh, normal);
   out.corners = int(corners.size());
   if (corners.empty()) return out;
 
@@ -227,6 +323,10 @@ FlatCornerSplit split_flat_corners(Mesh<Simplex<D>, Nodes, D>& mesh) {
     bool untouched = true;
     for (int k = 0; k <= D; ++k) untouched = untouched && el[k] == mesh.vertex(c.element, k);
     if (!untouched) continue;
+    if (c.split_from >= 0) {
+      split(el[c.split_from], el[c.split_to]);
+      continue;
+    }
     std::optional<detail::MeshEdge> longest;
     double length = -1.0;
     for (int i = 0; i <= D; ++i)
@@ -259,6 +359,30 @@ FlatCornerSplit split_flat_corners(Mesh<Simplex<D>, Nodes, D>& mesh) {
   split_mesh.boundary_facets() = std::move(facets);
   mesh = std::move(split_mesh);
   return out;
+}
+
+}  // namespace detail
+
+/// Splits edges until no element has a flat corner (see above). The mesh
+/// must be linear; new nodes are free (interior), classified on the split
+/// elements' entity; the ideal becomes the new straight-sided mesh. A split
+/// leaves no flat corner of the first kind (every corner of a new element
+/// has an edge to the new, interior node), but a straight corner's split can
+/// leave another straight corner at the same vertex (its element's third
+/// edge on the boundary too), so passes repeat while they find corners (at
+/// most max_passes).
+template <int D, NodeSet Nodes>
+FlatCornerSplit split_flat_corners(Mesh<Simplex<D>, Nodes, D>& mesh, const EntityNormal<D>& normal = {}) {
+  constexpr int max_passes = 4;
+  FlatCornerSplit total;
+  for (int pass = 0; pass < max_passes; ++pass) {
+    const auto s = detail::split_flat_corners_once(mesh, normal);
+    total.corners += s.corners;
+    total.edges_split += s.edges_split;
+    total.centroid_splits += s.centroid_splits;
+    if (s.corners == 0) break;
+  }
+  return total;
 }
 
 }  // namespace hom
