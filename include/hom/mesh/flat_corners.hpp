@@ -137,11 +137,13 @@ bool nearly_parallel(const std::vector<Eigen::Matrix<double, D, 1>>& normals, do
   return true;
 }
 
-/// Whether the entities of the facets `around` have nearly parallel normals
-/// at mesh node `node` (false where one has none).
+/// The common tangent plane's normal at mesh node `node` of the entities of
+/// the facets `around`: the first entity's normal when all their normals are
+/// nearly parallel there, nothing otherwise (or where one has none).
 template <int D>
-bool entities_tangent(const std::vector<BoundaryFacet<Simplex<D>>>& facets, const std::vector<int>& around, int node,
-                      const EntityNormal<D>& normal, double min_cos) {
+std::optional<Eigen::Matrix<double, D, 1>> tangent_normal(const std::vector<BoundaryFacet<Simplex<D>>>& facets,
+                                                          const std::vector<int>& around, int node,
+                                                          const EntityNormal<D>& normal, double min_cos) {
   std::vector<int> entities;
   for (int k : around) entities.push_back(facets[k].entity_tag);
   std::sort(entities.begin(), entities.end());
@@ -149,10 +151,11 @@ bool entities_tangent(const std::vector<BoundaryFacet<Simplex<D>>>& facets, cons
   std::vector<Eigen::Matrix<double, D, 1>> normals;
   for (int t : entities) {
     const auto n = normal(t, node);
-    if (!n) return false;
+    if (!n) return std::nullopt;
     normals.push_back(*n);
   }
-  return nearly_parallel(normals, min_cos);
+  if (normals.empty() || !nearly_parallel(normals, min_cos)) return std::nullopt;
+  return normals.front();
 }
 
 /// The straight corner at vertex a of tetrahedron e (see FlatCorner), if it
@@ -171,8 +174,10 @@ std::optional<FlatCorner> straight_corner(const Mesh<Simplex<3>, Nodes, 3>& mesh
     ends.push_back(b);
     around.insert(around.end(), it->second.begin(), it->second.end());
   }
-  if (ends.size() < 2 || !entities_tangent(facets, around, node, normal, min_cos)) return std::nullopt;
-  const Eigen::Vector3d n = *normal(facets[around.front()].entity_tag, node);
+  if (ends.size() < 2) return std::nullopt;
+  const auto tangent = tangent_normal(facets, around, node, normal, min_cos);
+  if (!tangent) return std::nullopt;
+  const Eigen::Vector3d n = *tangent;
   auto in_plane = [&](int b) -> Eigen::Vector3d {
     const Eigen::Vector3d chord = mesh.node(mesh.vertex(e, b)) - mesh.node(node);
     return (chord - chord.dot(n) * n).normalized();
@@ -234,7 +239,7 @@ std::vector<FlatCorner> find_flat_corners(const Mesh<Simplex<D>, Nodes, D>& mesh
       std::vector<Eigen::Matrix<double, D, 1>> facet_normals;
       for (int k : around) facet_normals.push_back(detail::facet_normal(mesh, facets[k]));
       if (detail::nearly_parallel(facet_normals, min_cos) ||
-          (normal && detail::entities_tangent(facets, around, mesh.vertex(e, a), normal, min_cos)))
+          (normal && detail::tangent_normal(facets, around, mesh.vertex(e, a), normal, min_cos)))
         out.push_back({e, a, facets[around.front()].entity_tag});
     }
   return out;
