@@ -366,7 +366,17 @@ std::vector<Case> all_cases(const fs::path& data) {
   auto size_20th = [](const hom::cad::CadModel& m) { return sized(0.05 * m.size()); };
   cases.push_back({"propeller_surface", [] { return hom::cad::propeller_model(); }, Kind::surface_tri, size_20th, {5},
                    {3}, {}});
-  cases.push_back({"propeller", [] { return hom::cad::propeller_model(); }, Kind::volume, size_20th, {4}, {2}, {}});
+  // The volume graded by curvature (8 elements per 2 pi, not below 1/64 of
+  // the model's size): at the uniform size an element spans the blades'
+  // elliptic leading and trailing edges (radius 1.6% of the chord) and the
+  // curved surface mesh already has a fold there.
+  auto graded_by_curvature = [](const hom::cad::CadModel& m) {
+    auto o = sized(0.05 * m.size(), 8);
+    o.size_min = m.size() / 64;
+    return o;
+  };
+  cases.push_back({"propeller", [] { return hom::cad::propeller_model(); }, Kind::volume, graded_by_curvature, {4}, {2},
+                   {}});
   // The wing's domain, graded: size 1/30 of the model's at the wing's
   // vertices, 1/10 at the box's corners (every coordinate at an end of the
   // bounding box).
@@ -392,7 +402,10 @@ std::vector<Case> all_cases(const fs::path& data) {
     // Default degrees 2 and 3 keep the default run near ten minutes on two
     // loaded cores; --p 2,3,4,5 runs the full range (the volume
     // cases then take several minutes each).
-    cases.push_back({"wing_fuselage", file("wing_fuselage.step"), Kind::volume, relative(0.05), {2, 3}, {2}, {}});
+    // wing_fuselage graded by curvature as the propeller: at the uniform size
+    // 33 elements have det <= 0 at p = 2, at the fuselage's tail and at the
+    // wing's root fairing.
+    cases.push_back({"wing_fuselage", file("wing_fuselage.step"), Kind::volume, graded_by_curvature, {2, 3}, {2}, {}});
     // ring_in_sphere, graded: size 1/70 of the model's at the ring's vertices
     // (those well inside the sphere). At the default size one element edge
     // spans a fillet of the ring (radius 5, against elements of 30 to 65), and

@@ -1,5 +1,5 @@
 // hom curve [MODEL.step|.stp|.iges|.igs|.brep] [--mesh LINEAR.msh] [--p P (2)] [-o OUT.msh (curved.msh)]
-//           [--size H] [--size-curvature N] [--solids TAGS] [--surface] [--quads]
+//           [--size H] [--size-min H] [--size-curvature N] [--solids TAGS] [--surface] [--quads]
 //           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
 //           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
 //           [--certify [--certify-depth N] [--certify-rounds N]]
@@ -79,6 +79,7 @@ struct CurveCli {
   int p = 0;
   bool p_given = false;  ///< --p on the command line (a curved --mesh keeps its own degree)
   double size = 0.0;
+  double size_min = 0.0;
   int size_curvature = 0;
   std::string solids;  ///< --solids: model solid tags, comma-separated (empty: all)
   bool surface = false;
@@ -143,12 +144,16 @@ void check_options(const CurveCli& o) {
   if (o.pcont != "auto" && o.pcont != "on" && o.pcont != "off")
     throw UsageError("curve: --pcont must be auto, on or off, got '" + o.pcont + "'");
   if (o.size < 0) throw UsageError("curve: --size must be positive");
+  if (o.size_min < 0) throw UsageError("curve: --size-min must be >= 0");
+  if (o.size_min > 0 && o.size > 0 && o.size_min > o.size)
+    throw UsageError("curve: --size-min must not exceed --size");
   if (o.size_curvature < 0) throw UsageError("curve: --size-curvature must be >= 0");
   if (o.threads < 0) throw UsageError("curve: --threads must be >= 0 (0: OpenMP's default)");
   if (!(o.tolerance > 0)) throw UsageError("curve: --tolerance must be positive");
   o.certify.check("curve");
-  if (o.mesh.empty() == false && (o.size > 0 || o.size_curvature > 0 || !o.solids.empty()))
-    throw UsageError("curve: --size, --size-curvature and --solids apply to the built-in mesher, not to --mesh");
+  if (o.mesh.empty() == false && (o.size > 0 || o.size_min > 0 || o.size_curvature > 0 || !o.solids.empty()))
+    throw UsageError(
+        "curve: --size, --size-min, --size-curvature and --solids apply to the built-in mesher, not to --mesh");
   if (o.bl_first != 0.0) check_boundary_layer_options(o);
   else if (o.bl_options_given) throw UsageError("curve: the --bl-* options need --bl-first H (the first layer's height)");
 }
@@ -205,6 +210,8 @@ int run(int argc, char** argv) {
       ("mesh", po::value(&o.mesh),
        "linear mesh to curve instead of meshing the model, or curved mesh to optimize on it (.msh)")       //
       ("size", po::value(&o.size)->default_value(0.0), "element size (0: model size / 20)")          //
+      ("size-min", po::value(&o.size_min)->default_value(0.0),
+       "smallest element size, a floor for --size-curvature (0: none)")  //
       ("size-curvature", po::value(&o.size_curvature)->default_value(0),
        "elements per 2 pi radians of curvature (0: off)")                                            //
       ("solids", po::value(&o.solids),
@@ -254,6 +261,7 @@ int run(int argc, char** argv) {
   for (const auto& h : cad.healing()) std::printf("  healed: %s\n", h.c_str());
   hom::cad::CadMeshOptions mo;
   mo.size = o.size;
+  mo.size_min = o.size_min;
   mo.size_from_curvature = o.size_curvature;
   mo.threads = 1;
   if (!o.solids.empty()) mo.solids = solid_tags(cad, o.solids);
@@ -264,6 +272,9 @@ int run(int argc, char** argv) {
     for (int v = 1; v <= cad.num_vertices(); ++v)
       mo.vertex_sizes[v] = (cad.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
   }
+  if (mo.size == 0.0 && o.size_min > cad.size() / 20)
+    throw hom::tools::UsageError("curve: --size-min " + std::to_string(o.size_min) +
+                                 " exceeds the default size (model size / 20 = " + std::to_string(cad.size() / 20) + ")");
 
   const hom::tools::CadCommandOptions co = cad_command_options(o);
   const auto t0 = std::chrono::steady_clock::now();
