@@ -192,6 +192,8 @@ void keep_entities(io::MshData& d, const std::set<EntityId>& kept) {
 
 }  // namespace
 
+double default_mesh_size(const CadModel& cad) { return cad.size() / 20; }
+
 io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   if (o.dim != 2 && o.dim != 3) throw std::invalid_argument("hom::cad::cad_mesh_data: dim must be 2 or 3");
   if (cad.num_faces() == 0) throw MeshingError(cad.name() + ": the model has no faces to mesh");
@@ -220,7 +222,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       gmsh::option::setNumber("Mesh.Algorithm", o.algorithm_2d > 0 ? o.algorithm_2d : 6);
       gmsh::option::setNumber("Mesh.Algorithm3D", o.algorithm_3d);
       gmsh::option::setNumber("Mesh.ElementOrder", 1);
-      gmsh::option::setNumber("Mesh.MeshSizeMax", scale * (o.size > 0 ? o.size : size / 20));
+      gmsh::option::setNumber("Mesh.MeshSizeMax", scale * (o.size > 0 ? o.size : default_mesh_size(cad)));
       if (o.size_min > 0) gmsh::option::setNumber("Mesh.MeshSizeMin", scale * o.size_min);
       gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", o.size_from_curvature);
       if (o.quads) {

@@ -60,7 +60,7 @@ struct CadMeshOptions {
   /// split). mesh_cad sets it for surface meshes; a planar mesh's are split
   /// by the curving pipeline (hom/mesh/flat_corners.hpp).
   bool split_triangle_ears = false;
-  double size = 0.0;             ///< Mesh.MeshSizeMax; 0: the model's bounding-box diagonal / 20
+  double size = 0.0;             ///< Mesh.MeshSizeMax; 0: default_mesh_size(model)
   double size_min = 0.0;         ///< Mesh.MeshSizeMin
   int size_from_curvature = 0;   ///< Mesh.MeshSizeFromCurvature: elements per 2 pi radians; 0: off
   std::map<int, double> vertex_sizes;  ///< mesh size at model vertices (tag -> size)
@@ -78,6 +78,10 @@ struct CadMeshOptions {
   /// surface mesh (dim 2), the faces of these solids.
   std::vector<int> solids;
 };
+
+/// The element size used when CadMeshOptions::size is 0: the model's
+/// bounding-box diagonal / 20.
+double default_mesh_size(const CadModel& cad);
 
 /// Meshes the model with Gmsh and returns the mesh as MSH data with the
 /// model's entity tags (see above); nodes keep their parametric coordinates.

@@ -272,9 +272,10 @@ int run(int argc, char** argv) {
     for (int v = 1; v <= cad.num_vertices(); ++v)
       mo.vertex_sizes[v] = (cad.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
   }
-  if (mo.size == 0.0 && o.size_min > cad.size() / 20)
+  if (mo.size == 0.0 && o.size_min > hom::cad::default_mesh_size(cad))
     throw hom::tools::UsageError("curve: --size-min " + std::to_string(o.size_min) +
-                                 " exceeds the default size (model size / 20 = " + std::to_string(cad.size() / 20) + ")");
+                                 " exceeds the default size (model size / 20 = " +
+                                 std::to_string(hom::cad::default_mesh_size(cad)) + ")");
 
   const hom::tools::CadCommandOptions co = cad_command_options(o);
   const auto t0 = std::chrono::steady_clock::now();
