@@ -732,6 +732,46 @@ TEST_CASE("a triangle ear (two edges on one curve at a corner) is split into thr
   }
 }
 
+TEST_CASE("a triangle whose corner joins two curves tangentially (G1) is an ear; at a kink it is not") {
+  // Face 1 is the plane z = 0. Triangle V A B, V = (0, 0), A = (1, 0.5),
+  // B = (-1, 0.5), has edge V-A on curve 1 and edge B-V on curve 2, which
+  // meet at model vertex V. Curve 1 leaves V along (1, 0) (the parabola
+  // y = x^2 / 2). Curve 2 leaves it along (-1, 0) (the parabola's other
+  // half: tangent, an ear), along (-1, 1) (a kink of 135 degrees: not), or
+  // along (-1, -0.5) (26.6 degrees off straight, within the 30 degrees of
+  // flat_corner_max_angle: an ear). Tangents are given in either sense.
+  const std::vector<std::pair<Eigen::Vector3d, int>> cases = {
+      {{-1, 0, 0}, 1}, {{1, 0, 0}, 1}, {{-1, 1, 0}, 0}, {{1, -1, 0}, 0}, {{-1, -0.5, 0}, 1}};
+  for (const auto& [curve2, ears] : cases) {
+    CAPTURE(curve2.transpose());
+    io::MshData d;
+    const std::vector<std::array<double, 3>> x = {{0, 0, 0}, {1, 0.5, 0}, {-1, 0.5, 0}, {0, 1.5, 0}};
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      io::MshNode n;
+      n.tag = std::int64_t(i) + 1;
+      n.x = x[i];
+      n.entity = EntityId{i == 0 ? 0 : i == 1 ? 1 : i == 2 ? 1 : 2, i == 2 ? 2 : 1};
+      n.num_params = i == 0 ? 0 : i < 3 ? 1 : 2;
+      n.params = {x[i][0], x[i][1], 0.0};
+      d.nodes.push_back(n);
+    }
+    add_msh_element(d, 1, 1, 2, {3, 1});
+    add_msh_element(d, 1, 1, 1, {1, 2});
+    add_msh_element(d, 2, 2, 1, {1, 2, 3});
+    add_msh_element(d, 2, 2, 1, {2, 4, 3});
+    const cad::FaceGeometry plane{
+        [](int, const Eigen::Vector3d& p) { return Eigen::Vector2d(p.x(), p.y()); },
+        [](int, const Eigen::Vector2d& uv) { return Eigen::Vector3d(uv.x(), uv.y(), 0.0); },
+        [&](int curve, const Eigen::Vector3d& p) -> Eigen::Vector3d {
+          REQUIRE(p.norm() == doctest::Approx(0.0));  // asked only at V
+          return curve == 1 ? Eigen::Vector3d(2, 0, 0) : Eigen::Vector3d(curve2);
+        }};
+    CHECK(cad::split_triangle_ears(d, plane) == ears);
+    CHECK(d.elements.size() == std::size_t(4 + 2 * ears));
+    if (ears == 1) CHECK(cad::split_triangle_ears(d, plane) == 0);
+  }
+}
+
 TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
   const auto dir = shared_cad_dir();
   if (!std::filesystem::exists(dir / "README.md")) {

@@ -385,7 +385,11 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       throw MeshingError(cad.name() + ": mesh element " + std::to_string(e.tag) + " is on an unmatched Gmsh entity");
   if (o.dim == 2 && (o.quads || o.split_triangle_ears)) {
     const FaceGeometry faces{[&](int f, const Eigen::Vector3d& x) { return geometry.surface(f)->project(x); },
-                             [&](int f, const Eigen::Vector2d& uv) { return geometry.surface(f)->evaluate(uv); }};
+                             [&](int f, const Eigen::Vector2d& uv) { return geometry.surface(f)->evaluate(uv); },
+                             [&](int c, const Eigen::Vector3d& x) -> Eigen::Vector3d {
+                               const auto* curve = geometry.curve(c);
+                               return curve ? curve->derivative(curve->project(x)) : Eigen::Vector3d::Zero();
+                             }};
     if (o.quads)
       split_quad_ears(d, faces);
     else

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "hom/mesh/flat_corners.hpp"
+
 namespace hom::cad {
 
 namespace {
@@ -42,17 +44,37 @@ class EarSplitter {
   }
 
   /// The corner of the element with these corner nodes (in order around it)
-  /// that is an ear's, or -1: both edges there on one curve. The corner is on
-  /// that curve, or on its vertex if it is closed (a periodic curve is as
-  /// smooth there as anywhere; at a kink the split only adds a node).
+  /// that is an ear's, or -1: both edges there on one curve, or on two curves
+  /// that meet tangentially there (smooth_join). On one curve the corner is
+  /// on it, or on its vertex if it is closed (a periodic curve is as smooth
+  /// there as anywhere; at a kink the split only adds a node).
   template <std::size_t N>
   int ear_corner(const std::array<std::int64_t, N>& corners) const {
     for (std::size_t i = 0; i < N; ++i) {
-      const auto before = curve_of_.find(edge_key(corners[i], corners[(i + N - 1) % N]));
-      const auto after = curve_of_.find(edge_key(corners[i], corners[(i + 1) % N]));
-      if (before != curve_of_.end() && after != curve_of_.end() && before->second == after->second) return int(i);
+      const std::int64_t prev = corners[(i + N - 1) % N], next = corners[(i + 1) % N];
+      const auto before = curve_of_.find(edge_key(corners[i], prev));
+      const auto after = curve_of_.find(edge_key(corners[i], next));
+      if (before == curve_of_.end() || after == curve_of_.end()) continue;
+      if (before->second == after->second || smooth_join(corners[i], before->second, prev, after->second, next))
+        return int(i);
     }
     return -1;
+  }
+
+  /// Whether curves a and b, leaving corner node `at` towards nodes
+  /// a_next and b_next, leave it in nearly opposite directions (within
+  /// flat_corner_max_angle): their tangents there, each oriented along its
+  /// edge of the element.
+  bool smooth_join(std::int64_t at, int a, std::int64_t a_next, int b, std::int64_t b_next) const {
+    if (!faces_.curve_tangent) return false;
+    const Eigen::Vector3d x = position(at);
+    auto leaving = [&](int curve, std::int64_t towards) -> Eigen::Vector3d {
+      const Eigen::Vector3d t = faces_.curve_tangent(curve, x), chord = position(towards) - x;
+      const double n = t.norm();
+      if (!(n > 0.0)) return Eigen::Vector3d::Zero();
+      return (t.dot(chord) < 0 ? -t : t) / n;
+    };
+    return leaving(a, a_next).dot(leaving(b, b_next)) <= -std::cos(flat_corner_max_angle);
   }
 
   Eigen::Vector3d position(std::int64_t tag) const {

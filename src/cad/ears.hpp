@@ -17,6 +17,11 @@
 /// - a triangle ear (Gmsh's surface meshers make them at the ends of thin
 ///   faces and where a curve turns sharply) is split at its centre into
 ///   three, so that the corner gets an edge to the new interior node.
+/// The corner may also be a model vertex where two curves meet tangentially
+/// (G1: a fillet's arc and the line it rounds off), given the curves'
+/// tangents: the element's two edges there then leave the corner within
+/// flat_corner_max_angle of opposite directions along the curves, and once
+/// curved its angle there is (nearly) pi, as on one curve.
 /// Planar triangle meshes get the same repair later, from the mesh's own
 /// boundary (hom/mesh/flat_corners.hpp, which also covers tetrahedra).
 
@@ -32,6 +37,9 @@ namespace hom::cad {
 struct FaceGeometry {
   std::function<Eigen::Vector2d(int face, const Eigen::Vector3d& x)> project;
   std::function<Eigen::Vector3d(int face, const Eigen::Vector2d& uv)> evaluate;
+  /// A tangent of curve `curve` at its point x (either sense, any length).
+  /// Empty: corners where two curves meet are never ears.
+  std::function<Eigen::Vector3d(int curve, const Eigen::Vector3d& x)> curve_tangent = {};
 };
 
 /// Splits every ear (see above) among the 4-node quadrilaterals of `d` (Gmsh
