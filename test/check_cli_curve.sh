@@ -80,7 +80,8 @@ err=$("$hom" curve --mesh "$work/none.msh" --p 3 -o "$work/m.msh" 2>&1 >/dev/nul
 # 4. Bad options: exit 2, nothing written.
 for args in "--p 1 -o $work/b.msh" "--p 3 -o $work/b.vtu" "--p 3 -o $work/b.msh --measure foo" \
             "--p 3 -o $work/b.msh --solver foo" "--p 3 -o $work/b.msh --quads" \
-            "--p 2 -o $work/b.msh --size-min -1" "--p 2 -o $work/b.msh --size 0.5 --size-min 1"; do
+            "--p 2 -o $work/b.msh --size-min -1" "--p 2 -o $work/b.msh --size 0.5 --size-min 1" \
+            "--p 2 -o $work/b.msh --merge-small-edges 0.1" "$work/any.brep --p 2 -o $work/b.msh --merge-small-edges -1"; do
   "$hom" curve $args >/dev/null 2>&1; rc=$?
   [[ $rc -eq 2 ]] || fail "bad options '$args': exit $rc, expected 2"
 done

@@ -19,6 +19,13 @@
 #include <set>
 #include <string>
 
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepTools.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Wire.hxx>
+#include <gp_Pnt.hxx>
+
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
 #include "ears.hpp"
@@ -772,6 +779,39 @@ TEST_CASE("a triangle whose corner joins two curves tangentially (G1) is an ear;
   }
 }
 
+TEST_CASE("healing step 4: an edge shorter than merge_small_edges is dropped, its neighbours joined") {
+  // A square face of side 10 whose left side is two edges, 9.97 and 0.03 long, nearly in line:
+  // wing_fuselage.step's root fairing has such edges (0.036 beside elements of 7 to 14).
+  BRepBuilderAPI_MakePolygon polygon;
+  for (const auto& [x, y] : {std::pair{0.0, 0.0}, {10.0, 0.0}, {10.0, 10.0}, {0.0, 10.0}, {0.001, 0.03}})
+    polygon.Add(gp_Pnt(x, y, 0.0));
+  polygon.Close();
+  const BRepBuilderAPI_MakeFace face(polygon.Wire(), true);
+  REQUIRE(face.IsDone());
+  const TempDir dir;
+  const std::string path = dir / "small_edge.brep";
+  REQUIRE(BRepTools::Write(face.Face(), path.c_str()));
+
+  const auto plain = cad::read_cad(path);
+  CHECK(plain.num_edges() == 5);
+  CHECK(plain.healing().empty());
+  cad::CadReadOptions merge;
+  merge.merge_small_edges = 0.01;  // shorter than any edge: nothing to do
+  CHECK(cad::read_cad(path, merge).num_edges() == 5);
+  merge.merge_small_edges = 0.1;
+  const auto merged = cad::read_cad(path, merge);
+  CHECK(merged.num_edges() == 4);
+  CHECK(merged.num_vertices() == 4);
+  CHECK(merged.valid());
+  REQUIRE(merged.healing().size() == 1);
+  CHECK(merged.healing()[0].find("5 -> 4") != std::string::npos);
+  // The face is the same face, up to the sliver the dropped edge cut off.
+  CHECK(merged.area() == doctest::Approx(plain.area()).epsilon(1e-3));
+  double shortest = 1e300;
+  for (int e = 1; e <= merged.num_edges(); ++e) shortest = std::min(shortest, merged.curve(e).length());
+  CHECK(shortest >= 9.9);
+}
+
 TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
   const auto dir = shared_cad_dir();
   if (!std::filesystem::exists(dir / "README.md")) {
@@ -797,6 +837,16 @@ TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
       CHECK((s.evaluate(s.project(s.evaluate(uv))) - s.evaluate(uv)).norm() <= 1e-7 * m.size());
     }
   }
+  // The root fairing's two 0.036 edges go with healing step 4; the model stays valid.
+  cad::CadReadOptions merge;
+  merge.merge_small_edges = 0.05;
+  const auto wing = cad::read_cad((dir / "wing_fuselage.step").string());
+  const auto merged = cad::read_cad((dir / "wing_fuselage.step").string(), merge);
+  CHECK(merged.num_edges() == wing.num_edges() - 2);
+  CHECK(merged.num_faces() == wing.num_faces());
+  CHECK(merged.valid());
+  // Joining the neighbours at one vertex moves the faces there by about the dropped edge's length.
+  CHECK(merged.volume() == doctest::Approx(wing.volume()).epsilon(1e-4));
   const auto sphere = cad::read_cad((dir / "sphere_nurbs_8patch_rhino.igs").string());
   CHECK(sphere.num_faces() >= 1);
   for (int f = 1; f <= sphere.num_faces(); ++f) {

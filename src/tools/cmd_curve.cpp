@@ -80,6 +80,7 @@ struct CurveCli {
   bool p_given = false;  ///< --p on the command line (a curved --mesh keeps its own degree)
   double size = 0.0;
   double size_min = 0.0;
+  double merge_small_edges = 0.0;
   int size_curvature = 0;
   std::string solids;  ///< --solids: model solid tags, comma-separated (empty: all)
   bool surface = false;
@@ -150,6 +151,9 @@ void check_options(const CurveCli& o) {
   if (o.size_curvature < 0) throw UsageError("curve: --size-curvature must be >= 0");
   if (o.threads < 0) throw UsageError("curve: --threads must be >= 0 (0: OpenMP's default)");
   if (!(o.tolerance > 0)) throw UsageError("curve: --tolerance must be positive");
+  if (!(o.merge_small_edges >= 0)) throw UsageError("curve: --merge-small-edges must be >= 0 (0: off)");
+  if (o.merge_small_edges > 0 && o.model.empty())
+    throw UsageError("curve: --merge-small-edges needs a MODEL file (the built-in model has no small edges)");
   o.certify.check("curve");
   if (o.mesh.empty() == false && (o.size > 0 || o.size_min > 0 || o.size_curvature > 0 || !o.solids.empty()))
     throw UsageError(
@@ -214,6 +218,8 @@ int run(int argc, char** argv) {
        "smallest element size, a floor for --size-curvature (0: none)")  //
       ("size-curvature", po::value(&o.size_curvature)->default_value(0),
        "elements per 2 pi radians of curvature (0: off)")                                            //
+      ("merge-small-edges", po::value(&o.merge_small_edges)->default_value(0.0),
+       "heal the model: drop CAD edges shorter than this, joining their neighbours (0: off)")  //
       ("solids", po::value(&o.solids),
        "mesh only these solids (model tags, comma-separated; default all): one region of a model whose "
        "solids touch without sharing faces")  //
@@ -256,7 +262,8 @@ int run(int argc, char** argv) {
   check_options(o);
 
   hom::cad::CadModel cad =
-      o.model.empty() ? hom::cad::cube_with_cavity_model() : hom::cad::read_cad(o.model);  // CadError names the file
+      o.model.empty() ? hom::cad::cube_with_cavity_model()
+                      : hom::cad::read_cad(o.model, {.merge_small_edges = o.merge_small_edges});  // CadError names the file
   std::printf("%s\n", cad.summary().c_str());
   for (const auto& h : cad.healing()) std::printf("  healed: %s\n", h.c_str());
   hom::cad::CadMeshOptions mo;
