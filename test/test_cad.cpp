@@ -590,6 +590,22 @@ TEST_CASE("surface meshes of the NURBS sphere: triangles and quadrilaterals on t
 
 namespace {
 
+// Appends the nodes of the triangle-ear tests, V = (0, 0), A = (1, 0.5),
+// B = (-1, 0.5) and C = (0, 1.5), tagged 1 to 4, node k on entity on[k] with
+// its (x, y) as parameters (as many as the entity's dimension).
+void add_ear_test_nodes(io::MshData& d, const std::array<EntityId, 4>& on) {
+  const std::vector<std::array<double, 3>> x = {{0, 0, 0}, {1, 0.5, 0}, {-1, 0.5, 0}, {0, 1.5, 0}};
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    io::MshNode n;
+    n.tag = std::int64_t(k) + 1;
+    n.x = x[k];
+    n.entity = on[k];
+    n.num_params = on[k].dim;
+    n.params = {x[k][0], x[k][1], 0.0};
+    d.nodes.push_back(n);
+  }
+}
+
 // Appends an element of Gmsh type `type` on entity (dim, tag) to d, tagged
 // after the last one.
 void add_msh_element(io::MshData& d, int type, int dim, int tag, const std::vector<std::int64_t>& nodes) {
@@ -679,17 +695,7 @@ TEST_CASE("a triangle ear (two edges on one curve at a corner) is split into thr
   for (const int v_dim : {1, 0, -1}) {
     CAPTURE(v_dim);
     io::MshData d;
-    const std::vector<std::array<double, 3>> x = {{0, 0, 0}, {1, 0.5, 0}, {-1, 0.5, 0}, {0, 1.5, 0}};
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      io::MshNode n;
-      n.tag = std::int64_t(i) + 1;
-      n.x = x[i];
-      const bool on_curve = i < 3;
-      n.entity = EntityId{i == 0 ? std::max(v_dim, 0) : on_curve ? 1 : 2, 1};
-      n.num_params = on_curve ? 1 : 2;
-      n.params = {x[i][0], x[i][1], 0.0};
-      d.nodes.push_back(n);
-    }
+    add_ear_test_nodes(d, {EntityId{std::max(v_dim, 0), 1}, EntityId{1, 1}, EntityId{1, 1}, EntityId{2, 1}});
     auto add = [&](int type, int dim, std::vector<std::int64_t> nodes) { add_msh_element(d, type, dim, 1, nodes); };
     add(1, 1, {3, 1});
     add(1, 1, {1, 2});
@@ -752,16 +758,7 @@ TEST_CASE("a triangle whose corner joins two curves tangentially (G1) is an ear;
   for (const auto& [curve2, ears] : cases) {
     CAPTURE(curve2.transpose());
     io::MshData d;
-    const std::vector<std::array<double, 3>> x = {{0, 0, 0}, {1, 0.5, 0}, {-1, 0.5, 0}, {0, 1.5, 0}};
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      io::MshNode n;
-      n.tag = std::int64_t(i) + 1;
-      n.x = x[i];
-      n.entity = EntityId{i == 0 ? 0 : i == 1 ? 1 : i == 2 ? 1 : 2, i == 2 ? 2 : 1};
-      n.num_params = i == 0 ? 0 : i < 3 ? 1 : 2;
-      n.params = {x[i][0], x[i][1], 0.0};
-      d.nodes.push_back(n);
-    }
+    add_ear_test_nodes(d, {EntityId{0, 1}, EntityId{1, 1}, EntityId{1, 2}, EntityId{2, 1}});
     add_msh_element(d, 1, 1, 2, {3, 1});
     add_msh_element(d, 1, 1, 1, {1, 2});
     add_msh_element(d, 2, 2, 1, {1, 2, 3});
