@@ -9,7 +9,9 @@
 # adds a boundary layer on the cavity (the default wall: the faces off the
 # bounding box): every stage reported, the result valid with its wall on the
 # CAD, bad boundary-layer options refused, and a layer too thick for the
-# domain stopped at its tangled linear stage with nothing written.
+# domain stopped at its tangled linear stage with nothing written. A mesh
+# folded at a node that only held nodes determine writes no mesh but its VTU,
+# the failing cells marked.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -154,4 +156,40 @@ for args in "--solids 3" "--solids 0" "--solids x" "--solids 1 --mesh $work/bib_
   [[ $rc -eq 2 ]] || fail "bad --solids '$args': exit $rc, expected 2: $err"
 done
 [[ ! -e "$work/bibbad.msh" ]] || fail "bad --solids: output written"
+
+# 8. A fold that only held nodes determine: in the built-in cube's curved
+# mesh of section 1, one edge node on a CAD curve is moved to 0.95 of its
+# edge (test/fold_curve_node.py), so det D phi < 0 at the edge's far end and
+# nothing the optimizer may move can undo it. `hom curve --mesh` refuses it:
+# exit 3, no mesh, but the VTU, a picture to find the fold by: its cell fields
+# 'folded_at_node' and 'inverted' mark as many cells as the message counts.
+"$py" "$(dirname "$0")/fold_curve_node.py" "$out" "$work/folded_in.msh" || fail "could not fold the mesh (python3-gmsh)"
+err=$("$hom" curve --mesh "$work/folded_in.msh" -o "$work/folded.msh" --vtu "$work/folded.vtu" --threads 1 \
+      2>&1 >/dev/null); rc=$?
+[[ $rc -eq 3 ]] || fail "folded at a held node: exit $rc, want 3: $err"
+[[ ! -e "$work/folded.msh" ]] || fail "folded at a held node: the mesh was written"
+[[ -s "$work/folded.vtu" ]] || fail "folded at a held node: no VTU written"
+n_bad=$(sed -n 's/.*INVALID result: \([0-9]*\) .*/\1/p' <<<"$err" | head -1)
+[[ -n "$n_bad" && "$n_bad" -gt 0 ]] || fail "folded at a held node: no count in the message: $err"
+"$py" - "$work/folded.vtu" "$n_bad" <<'PY' || fail "folded at a held node: the VTU does not mark the $n_bad elements"
+import sys
+try:
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+except ImportError:  # no python3-vtk9: the fields' names at least
+    text = open(sys.argv[1], errors="replace").read()
+    assert all(f'Name="{f}"' in text for f in ("uncertified", "folded_at_node", "inverted")), "fields missing"
+    sys.exit(0)
+reader = vtk.vtkXMLUnstructuredGridReader()
+reader.SetFileName(sys.argv[1])
+reader.Update()
+cells = reader.GetOutput().GetCellData()
+marked = {f: vtk_to_numpy(cells.GetArray(f)) for f in ("folded_at_node", "inverted", "uncertified")}
+for f, m in marked.items():
+    assert set(m.tolist()) <= {0.0, 1.0}, f
+# The message counts the inverted elements if any, else those folded at a node.
+n = int(marked["inverted"].sum()) or int(marked["folded_at_node"].sum())
+assert n == int(sys.argv[2]), (n, sys.argv[2])
+assert marked["uncertified"].sum() == 0  # no --certify: nothing is marked uncertified
+PY
 echo "OK"

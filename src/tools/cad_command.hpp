@@ -2,8 +2,8 @@
 /// @file cad_command.hpp
 /// What `hom curve` and `hom optimize --cad` share: a user's mesh classified
 /// on a CAD model, chapter 6's pipeline (or its optimization tail alone on a
-/// curved mesh) run on it, the result checked, and the mesh, VTU and JSON
-/// report written only when it is valid.
+/// curved mesh) run on it, the result checked, and the mesh written only when
+/// it is valid (the VTU and JSON report always, to show what failed).
 
 #include <sys/resource.h>
 
@@ -134,8 +134,8 @@ void classify_user_mesh(MeshT& mesh, const cad::CadModel& cad, double tolerance)
 /// det D phi > 0 at every node (>= 0 on surfaces, whose normal vanishes at a
 /// pole), every boundary node on its CAD entity and, with
 /// CurveOptions::certify, every element certified valid. An invalid result writes
-/// no mesh (only the JSON report, which says what happened). Returns the exit
-/// status: 0 written, 3 invalid.
+/// no mesh: only the JSON report, which says what happened, and the VTU, whose
+/// fields mark the failing elements. Returns the exit status: 0 written, 3 invalid.
 template <class MeshT>
 int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadCommandOptions& o, double t_linear) {
   using F = typename MeshT::family;
@@ -173,23 +173,23 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   const char* cmd = o.command.c_str();
   if (!valid) {
     if (r.inverted > 0) {
-      std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; nothing written\n",
+      std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; no mesh written\n",
                    cmd, r.inverted, r.mesh.num_elements());
       print_failing_elements(r, [&](int e) { return !r.element_valid[e]; });
     } else if (!r.conformity.ok)
-      std::fprintf(stderr, "hom: %s: INVALID result: %s; nothing written\n", cmd, r.conformity.problem.c_str());
+      std::fprintf(stderr, "hom: %s: INVALID result: %s; no mesh written\n", cmd, r.conformity.problem.c_str());
     else if (uncertified) {
       const auto& failing = r.certification->uncertified;  // ascending
       std::fprintf(stderr,
                    "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish between "
-                   "quadrature points); nothing written\n",
+                   "quadrature points); no mesh written\n",
                    cmd, int(failing.size()), r.mesh.num_elements());
       print_failing_elements(r, [&](int e) { return std::binary_search(failing.begin(), failing.end(), e); });
     }
     else {
       std::fprintf(stderr,
                    "hom: %s: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
-                   "valid: a fold at an element corner); nothing written\n",
+                   "valid: a fold at an element corner); no mesh written\n",
                    cmd, folded_at_nodes);
       print_failing_elements(r, folded_at_a_node);
     }
@@ -227,7 +227,33 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
     }
     return cases;
   };
+  // The VTU is a picture, not a mesh a solver reads: an invalid result is
+  // written there too (never to -o), so that its failing elements can be
+  // found in ParaView by the fields inverted, folded_at_node and uncertified.
+  auto write_quality_vtu = [&](const MeshT& mesh) {
+    std::vector<double> inverted, folded, uncertified(r.element_valid.size(), 0.0);
+    for (int e = 0; e < int(r.element_valid.size()); ++e) {
+      inverted.push_back(r.element_valid[e] ? 0.0 : 1.0);
+      folded.push_back(folded_at_a_node(e) ? 1.0 : 0.0);
+    }
+    if (r.certification)
+      for (int e : r.certification->uncertified) uncertified[e] = 1.0;
+    io::VtuOptions vo;
+    vo.interpolate_point_data = false;
+    io::write_vtu(o.vtu, mesh, {node_kind_field(mesh)},
+                  {{"quality", 1, r.element_quality},
+                   {"scaled_jacobian", 1, r.element_scaled_jacobian},
+                   {"inverted", 1, inverted},
+                   {"folded_at_node", 1, folded},
+                   {"uncertified", 1, uncertified}},
+                  vo);
+  };
   if (!valid) {
+    if (!o.vtu.empty()) {
+      write_quality_vtu(r.mesh);
+      std::printf("wrote %s (the invalid result, for inspection: fields inverted, folded_at_node, uncertified)\n",
+                  o.vtu.c_str());
+    }
     if (!o.json.empty()) io::write_report(o.json, program, HOM_VERSION, json_cases());
     return 3;
   }
@@ -241,15 +267,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
               "curved elements lie within %.2g of the CAD)\n",
               o.out.c_str(), gap);
   if (!o.vtu.empty()) {
-    std::vector<double> inverted;
-    for (bool v : r.element_valid) inverted.push_back(v ? 0.0 : 1.0);
-    io::VtuOptions vo;
-    vo.interpolate_point_data = false;
-    io::write_vtu(o.vtu, mesh, {node_kind_field(mesh)},
-                  {{"quality", 1, r.element_quality},
-                   {"scaled_jacobian", 1, r.element_scaled_jacobian},
-                   {"inverted", 1, inverted}},
-                  vo);
+    write_quality_vtu(mesh);
     std::printf("wrote %s\n", o.vtu.c_str());
   }
   if (!o.json.empty()) {

@@ -246,7 +246,8 @@ int run(int argc, char** argv) {
        "off the bounding box)")  //
       ("bl-extrusion", po::value(&o.bl_extrusion)->default_value(0.1),
        "boundary layer: the inserted topology is extruded by this fraction of the total height")  //
-      ("vtu", po::value(&o.vtu), "write the curved mesh colored by quality (ParaView)")              //
+      ("vtu", po::value(&o.vtu),
+       "write the curved mesh colored by quality (ParaView); an invalid result too, its failing cells marked")  //
       ("json", po::value(&o.json), "write the statistics of every stage as JSON")                    //
       ("verbose,v", po::bool_switch(&o.verbose), "one progress line per optimizer iteration (stderr)");
   o.certify.declare(opts,
