@@ -22,6 +22,15 @@
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <Geom2d_Line.hxx>
+#include <GeomAPI_ProjectPointOnSurf.hxx>
+#include <Geom_Curve.hxx>
+#include <Geom_Surface.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Wire.hxx>
 #include <gp_Pnt.hxx>
@@ -807,6 +816,62 @@ TEST_CASE("healing step 4: an edge shorter than merge_small_edges is dropped, it
   double shortest = 1e300;
   for (int e = 1; e <= merged.num_edges(); ++e) shortest = std::min(shortest, merged.curve(e).length());
   CHECK(shortest >= 9.9);
+}
+
+TEST_CASE("edge_uv_on_face: the face's point nearest the edge's 3D point, when the pcurve strays from it") {
+  // The square [0, 10]^2 in the plane z = 0. Its edge along y = 0 gets a
+  // pcurve shifted by 0.3 along the edge: the same segment, S(pcurve(t)) =
+  // C(t + 0.3) (as t106_turbine_cascade.step's pcurves stray from their 3D
+  // curves, by up to 1.8 at equal parameters).
+  BRepBuilderAPI_MakePolygon polygon(gp_Pnt(0, 0, 0), gp_Pnt(10, 0, 0), gp_Pnt(10, 10, 0), gp_Pnt(0, 10, 0), true);
+  const BRepBuilderAPI_MakeFace made(polygon.Wire(), true);
+  REQUIRE(made.IsDone());
+  const TopoDS_Face face = made.Face();
+  const Handle(Geom_Surface) plane = BRep_Tool::Surface(face);
+  TopoDS_Edge bottom;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+    double a = 0, b = 0;
+    const Handle(Geom_Curve) c = BRep_Tool::Curve(TopoDS::Edge(ex.Current()), a, b);
+    const gp_Pnt m = c->Value(0.5 * (a + b));
+    if (std::abs(m.Y()) < 1e-12) bottom = TopoDS::Edge(ex.Current());
+  }
+  REQUIRE(!bottom.IsNull());
+  double a = 0, b = 0;
+  const Handle(Geom_Curve) c3 = BRep_Tool::Curve(bottom, a, b);
+  // The straying pcurve: uv(t) = uv of C(t + 0.3), in the plane's own (u, v).
+  GeomAPI_ProjectPointOnSurf start(c3->Value(a + 0.3), plane);
+  double u0 = 0, v0 = 0;
+  start.LowerDistanceParameters(u0, v0);
+  GeomAPI_ProjectPointOnSurf next(c3->Value(a + 1.3), plane);
+  double u1 = 0, v1 = 0;
+  next.LowerDistanceParameters(u1, v1);
+  const gp_Dir2d along(u1 - u0, v1 - v0);
+  const gp_Pnt2d origin(u0 - a * along.X(), v0 - a * along.Y());
+  BRep_Builder().UpdateEdge(bottom, new Geom2d_Line(origin, along), face, 1.0);
+  const TempDir dir;
+  const std::string path = dir / "stray.brep";
+  REQUIRE(BRepTools::Write(face, path.c_str()));
+
+  cad::CadReadOptions as_is;
+  as_is.heal = false;  // keep the straying pcurve
+  const auto m = cad::read_cad(path, as_is);
+  REQUIRE(m.num_faces() == 1);
+  int checked = 0;
+  for (int e = 1; e <= m.num_edges(); ++e) {
+    const auto c = m.curve(e);
+    for (int k = 0; k <= 10; ++k) {
+      const double t = c.range().lo + 0.1 * k * c.range().length();
+      const Eigen::Vector2d uv = m.edge_uv_on_face(e, 1, t);
+      CHECK((m.surface(1).evaluate(uv) - c.evaluate(t)).norm() <= 1e-9);
+      ++checked;
+    }
+  }
+  CHECK(checked == 44);
+  // The pcurve itself does stray: its point is 0.3 along the edge from C(t).
+  double pa = 0, pb = 0;
+  const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(bottom, face, pa, pb);
+  const gp_Pnt2d q = pc->Value(a + 1.0);
+  CHECK(plane->Value(q.X(), q.Y()).Distance(c3->Value(a + 1.0)) == doctest::Approx(0.3));
 }
 
 TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {

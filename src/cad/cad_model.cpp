@@ -33,6 +33,7 @@
 #include <GeomAdaptor_Curve.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <Geom_Curve.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_SphericalSurface.hxx>
 #include <Geom2d_Curve.hxx>
@@ -64,6 +65,7 @@
 #include <gp_Pnt.hxx>
 #include <gp_Sphere.hxx>
 
+#include "hom/detail/surface_projection.hpp"
 #include "occ_data.hpp"
 
 namespace hom::cad {
@@ -457,7 +459,18 @@ Eigen::Vector2d CadModel::edge_uv_on_face(int edge_tag, int face_tag, double t) 
     throw std::out_of_range("hom::cad::CadModel: edge " + std::to_string(edge_tag) + " has no curve on face " +
                             std::to_string(face_tag));
   const gp_Pnt2d p = c->Value(t);
-  return {p.X(), p.Y()};
+  const Eigen::Vector2d on_pcurve(p.X(), p.Y());
+  double a = 0, b = 0;
+  const Handle(Geom_Curve) curve = BRep_Tool::Curve(e, a, b);
+  if (curve.IsNull()) return on_pcurve;  // a degenerated edge: its pcurve is all there is
+  const gp_Pnt q = curve->Value(t);
+  const Eigen::Vector3d x(q.X(), q.Y(), q.Z());
+  const OccSurface s = surface(face_tag);
+  Eigen::Vector2d uv = ::hom::detail::closest_point_newton(s, x, on_pcurve);
+  for (int k = 0; k < 2; ++k) uv[k] = s.range(k).unwrap(uv[k], on_pcurve[k]);
+  // Newton only improves on the start; at a pole it may wander in the free
+  // parameter without getting closer, so the pcurve's point stays then.
+  return (s.evaluate(uv) - x).norm() < (s.evaluate(on_pcurve) - x).norm() - 1e-12 * s.size() ? uv : on_pcurve;
 }
 
 GeometryModel<3> CadModel::geometry_model() const {

@@ -135,8 +135,13 @@ class CadModel {
   std::vector<int> inner_shell_faces() const;
   std::vector<int> edge_faces(int edge_tag) const;
   /// The (u, v) on face `face_tag` of the point of edge `edge_tag` at its
-  /// parameter t (through the edge's pcurve on the face; for a seam edge the
-  /// pcurve of the edge's forward orientation).
+  /// parameter t: the closest point of the surface to the edge's 3D point
+  /// C(t), found by Newton's method from the edge's pcurve on the face (for a
+  /// seam edge the pcurve of the edge's forward orientation), periodic
+  /// parameters next to the pcurve's. A file's pcurve may stray from its 3D
+  /// curve (t106_turbine_cascade.step: by 0.67 in space and 1.8 at equal
+  /// parameters); then S(pcurve(t)) is not the node at C(t), and a face
+  /// element would be checked with its boundary nodes elsewhere.
   Eigen::Vector2d edge_uv_on_face(int edge_tag, int face_tag, double t) const;
 
   /// Face tags -> OccSurface and edge tags -> OccCurve (degenerated edges
