@@ -18,6 +18,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
@@ -429,7 +430,10 @@ TEST_CASE("meshing the cube with a cavity: every boundary node on the CAD") {
   o.size = 1.62;
   for (int v = 1; v <= m.num_vertices(); ++v)
     o.vertex_sizes[v] = (m.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
+  bool remeshed = false;  // (no face needs MeshAdapt here)
+  o.progress = [&](const std::string&) { remeshed = true; };
   const auto mesh = cad::mesh_cad<Simplex<3>>(m, o);
+  CHECK(!remeshed);
   CHECK(mesh.num_elements() > 1200);
   CHECK(mesh.num_elements() < 1700);
   const auto g = m.geometry_model();
@@ -909,6 +913,27 @@ TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
   CHECK(merged.valid());
   // Joining the neighbours at one vertex moves the faces there by about the dropped edge's length.
   CHECK(merged.volume() == doctest::Approx(wing.volume()).epsilon(1e-4));
+  // Frontal-Delaunay lays slivers across the root fairing's collapsed B-spline patches (faces 3 and 14);
+  // cad_mesh_data meshes those again with MeshAdapt, at the size.
+  cad::CadMeshOptions fairing;
+  fairing.size_from_curvature = 8;
+  fairing.size_min = 14;
+  std::vector<std::string> notes;
+  fairing.progress = [&](const std::string& line) { notes.push_back(line); };
+  auto longest_edge = [](const auto& mesh) {
+    double longest = 0;
+    for (int e = 0; e < mesh.num_elements(); ++e)
+      for (int i = 0; i < 3; ++i)
+        longest = std::max(longest, (mesh.node(mesh.vertex(e, i)) - mesh.node(mesh.vertex(e, (i + 1) % 3))).norm());
+    return longest;
+  };
+  const double size = cad::default_mesh_size(wing);
+  CHECK(longest_edge(cad::mesh_cad<Simplex<2>, WarpBlend, 3>(wing, fairing)) < 2 * size);
+  REQUIRE(notes.size() == 1);
+  CHECK(notes[0].find("faces 3 14 meshed again with MeshAdapt") != std::string::npos);
+  fairing.algorithm_2d = 6;  // Frontal-Delaunay everywhere, as asked: the slivers stay
+  CHECK(longest_edge(cad::mesh_cad<Simplex<2>, WarpBlend, 3>(wing, fairing)) > 2 * size);
+  CHECK(notes.size() == 1);
   const auto sphere = cad::read_cad((dir / "sphere_nurbs_8patch_rhino.igs").string());
   CHECK(sphere.num_faces() >= 1);
   for (int f = 1; f <= sphere.num_faces(); ++f) {

@@ -5,8 +5,12 @@
 #include <doctest/doctest.h>
 
 #include <gmsh.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <numbers>
 #include <set>
 #include <string>
@@ -179,4 +183,34 @@ TEST_CASE("analytic geometry and mesh from a Gmsh model") {
   for (const auto& t : tags) tets += t.size();
   CHECK(std::size_t(mesh.num_elements()) == tets);
   gmsh::model::remove();
+}
+
+[[noreturn]] void throw_as_gmsh_does(const char* message) { throw std::string(message); }
+
+// A Gmsh error inside its OpenMP meshing loop reaches std::terminate (see
+// GmshSession). The child process stands for `hom curve`: it opens a session,
+// lets a std::string escape a noexcept function as Gmsh's loop does, and must
+// exit with status 1 and one line naming the subject and Gmsh's message.
+TEST_CASE("a Gmsh error that reaches std::terminate exits with status 1 and names the model") {
+  int err[2];
+  REQUIRE(pipe(err) == 0);
+  std::fflush(stdout);  // (the child flushes its copy of the buffer on exit)
+  const pid_t child = fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    dup2(err[1], 2);
+    const meshing::GmshSession session({false, 1, "part.step"});
+    []() noexcept { throw_as_gmsh_does("Impossible to mesh periodic surface 1"); }();
+    std::_Exit(7);  // not reached: std::terminate exits
+  }
+  close(err[1]);
+  std::string message;
+  char buffer[256];
+  for (ssize_t n; (n = read(err[0], buffer, sizeof buffer)) > 0;) message.append(buffer, static_cast<std::size_t>(n));
+  close(err[0]);
+  int status = 0;
+  REQUIRE(waitpid(child, &status, 0) == child);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 1);
+  CHECK(message.find("hom: part.step: Gmsh failed: Impossible to mesh periodic surface 1") == 0);
 }

@@ -190,6 +190,50 @@ void keep_entities(io::MshData& d, const std::set<EntityId>& kept) {
   d.element_nodes = std::move(element_nodes);
 }
 
+// The Gmsh surfaces whose mesh has an element wider than `width` (the
+// largest distance between two of its nodes).
+std::vector<int> faces_with_elements_wider_than(double width) {
+  std::vector<std::size_t> tags;
+  std::vector<double> xyz, uv;
+  gmsh::model::mesh::getNodes(tags, xyz, uv, -1, -1, false, false);
+  std::map<std::size_t, Eigen::Vector3d> x;
+  for (std::size_t i = 0; i < tags.size(); ++i) x[tags[i]] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+  std::vector<int> out;
+  gmsh::vectorpair faces;
+  gmsh::model::getEntities(faces, 2);
+  for (const auto& [dim, face] : faces) {
+    std::vector<int> types;
+    std::vector<std::vector<std::size_t>> elements, nodes;
+    gmsh::model::mesh::getElements(types, elements, nodes, 2, face);
+    double widest = 0;
+    for (std::size_t t = 0; t < types.size(); ++t) {
+      const std::size_t n = elements[t].empty() ? 0 : nodes[t].size() / elements[t].size();
+      for (std::size_t first = 0; first + n <= nodes[t].size(); first += n)
+        for (std::size_t a = first; a < first + n; ++a)
+          for (std::size_t b = a + 1; b < first + n; ++b)
+            widest = std::max(widest, (x.at(nodes[t][a]) - x.at(nodes[t][b])).norm());
+    }
+    if (widest > width) out.push_back(face);
+  }
+  return out;
+}
+
+// Gmsh's Frontal-Delaunay can lay slivers across a whole face of a B-spline
+// patch collapsed at one corner (wing_fuselage.step's wing-root fairing:
+// triangles 127 long at size 14, angles of 0.1 degrees), which no curving
+// makes valid. The faces with elements wider than `width` are meshed again
+// with MeshAdapt (Gmsh's algorithm 1), which meshes those at the size; the
+// others come out as before (Mesh.RandomSeed fixes them). Returns the Gmsh
+// tags of the faces meshed again.
+std::vector<int> remesh_stretched_faces(double width) {
+  const auto stretched = faces_with_elements_wider_than(width);
+  if (stretched.empty()) return {};
+  for (int face : stretched) gmsh::model::mesh::setAlgorithm(2, face, 1);
+  gmsh::model::mesh::clear();
+  gmsh::model::mesh::generate(2);
+  return stretched;
+}
+
 }  // namespace
 
 double default_mesh_size(const CadModel& cad) { return cad.size() / 20; }
@@ -211,9 +255,11 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   // their entity if they are within `loose` of it.
   const double loose = o.quads ? 1e-3 * size : tol;
   const double scale = o.quads ? 2.0 : 1.0;  // sizes before the quad subdivision (below)
-  const meshing::GmshSession session({o.verbose, o.threads});
+  const meshing::GmshSession session({o.verbose, o.threads, cad.name()});
   io::MshData d;
   std::map<int, int> maps[4];  // Gmsh tag -> model tag, per dimension
+  const double max_size = scale * (o.size > 0 ? o.size : default_mesh_size(cad));
+  std::vector<int> remeshed;  // Gmsh surfaces meshed again with MeshAdapt
   try {
     meshing::gmsh_call([&] {
       gmsh::model::add("hom_cad");
@@ -222,7 +268,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       gmsh::option::setNumber("Mesh.Algorithm", o.algorithm_2d > 0 ? o.algorithm_2d : 6);
       gmsh::option::setNumber("Mesh.Algorithm3D", o.algorithm_3d);
       gmsh::option::setNumber("Mesh.ElementOrder", 1);
-      gmsh::option::setNumber("Mesh.MeshSizeMax", scale * (o.size > 0 ? o.size : default_mesh_size(cad)));
+      gmsh::option::setNumber("Mesh.MeshSizeMax", max_size);
       if (o.size_min > 0) gmsh::option::setNumber("Mesh.MeshSizeMin", scale * o.size_min);
       gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", o.size_from_curvature);
       if (o.quads) {
@@ -265,7 +311,9 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
         maps[0][tag] = best;
         if (auto s = o.vertex_sizes.find(best); s != o.vertex_sizes.end()) gmsh::model::mesh::setSize({{0, tag}}, scale * s->second);
       }
-      gmsh::model::mesh::generate(o.dim);
+      gmsh::model::mesh::generate(2);
+      if (o.algorithm_2d <= 0) remeshed = remesh_stretched_faces(2 * max_size);
+      if (o.dim == 3) gmsh::model::mesh::generate(3);
     });
     d = meshing::gmsh_model_data(cad.name());
     meshing::gmsh_call([&] {
@@ -308,6 +356,15 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
     } catch (...) {
     }
     throw MeshingError(cad.name() + ": meshing failed: " + e.what());
+  }
+
+  if (!remeshed.empty() && o.progress) {
+    std::ostringstream line;
+    line.precision(3);
+    line << "linear mesh: CAD face" << (remeshed.size() > 1 ? "s" : "");
+    for (int f : remeshed) line << ' ' << (maps[2].count(f) ? maps[2].at(f) : f);
+    line << " meshed again with MeshAdapt (Frontal-Delaunay left elements there wider than " << 2 * max_size << ")";
+    o.progress(line.str());
   }
 
   // Relabel with the model's tags.

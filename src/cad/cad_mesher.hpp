@@ -30,6 +30,7 @@
 /// (MeshingError) that names it.
 
 #include <algorithm>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -64,7 +65,10 @@ struct CadMeshOptions {
   double size_min = 0.0;         ///< Mesh.MeshSizeMin
   int size_from_curvature = 0;   ///< Mesh.MeshSizeFromCurvature: elements per 2 pi radians; 0: off
   std::map<int, double> vertex_sizes;  ///< mesh size at model vertices (tag -> size)
-  int algorithm_2d = 0;          ///< Mesh.Algorithm; 0: 6 (Frontal-Delaunay; 4.8.4's 8 crashes on surfaces with a pole)
+  /// Mesh.Algorithm; 0: 6 (Frontal-Delaunay; 4.8.4's 8 crashes on surfaces
+  /// with a pole), with the faces where it leaves elements wider than twice
+  /// the size meshed again with MeshAdapt (1)
+  int algorithm_2d = 0;
   int algorithm_3d = 1;          ///< Mesh.Algorithm3D (1: Delaunay)
   int seed = 1;                  ///< Mesh.RandomSeed
   int threads = 1;               ///< General.NumThreads (1: deterministic)
@@ -77,6 +81,9 @@ struct CadMeshOptions {
   /// with its own copy of the interface) gives the mesh of one region. For a
   /// surface mesh (dim 2), the faces of these solids.
   std::vector<int> solids;
+  /// Called with a line on what the mesher did beyond the options (faces
+  /// meshed again with another algorithm); empty: silent.
+  std::function<void(const std::string&)> progress;
 };
 
 /// The element size used when CadMeshOptions::size is 0: the model's

@@ -73,7 +73,7 @@ void write_airfoil_section_brep(const AirfoilSectionOptions& o, const std::strin
   // Ends closer than this are one point (a sharp trailing edge written twice).
   const bool closed = (pr.front() - pr.back()).norm() < 1e-4 * chord;
 
-  const GmshSession session({o.verbose, 1});
+  const GmshSession session({o.verbose, 1, "the airfoil section"});
   gmsh_call([&] {
     gmsh::model::add("hom_airfoil_section");
     namespace occ = gmsh::model::occ;

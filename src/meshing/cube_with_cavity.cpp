@@ -22,7 +22,7 @@ CubeWithCavity cube_with_cavity(const CubeWithCavityOptions& o) {
     throw std::invalid_argument("cube_with_cavity: need 0 < sphere diameter < side");
   if (!(o.cube_size > 0) || !(o.sphere_size > 0))
     throw std::invalid_argument("cube_with_cavity: mesh sizes must be positive");
-  const GmshSession session({o.verbose, 1});
+  const GmshSession session({o.verbose, 1, "the cube with a spherical cavity"});
   CubeWithCavity out;
   const double c = o.side / 2;
   out.center = Eigen::Vector3d(c, c, c);

@@ -7,6 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
 #include <optional>
 #include <stdexcept>
 #include <vector>
@@ -22,11 +25,39 @@
 namespace hom::meshing {
 
 namespace {
+
 int session_count = 0;
+std::terminate_handler previous_terminate = nullptr;
+std::string meshed_subject;  // GmshSessionOptions::subject of the innermost session
+
+// See GmshSession: reports the exception that reached std::terminate (Gmsh
+// throws its messages as std::string) and exits with status 1.
+[[noreturn]] void report_gmsh_failure() {
+  std::string what = "an unknown error";
+  if (const auto e = std::current_exception()) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::string& message) {
+      what = message;
+    } catch (const std::exception& error) {
+      what = error.what();
+    } catch (...) {
+    }
+  }
+  std::fflush(stdout);  // the progress printed so far, before the error
+  std::fprintf(stderr, "hom: %s: Gmsh failed: %s (inside its parallel meshing loop, where it cannot be recovered)\n",
+               meshed_subject.empty() ? "meshing" : meshed_subject.c_str(), what.c_str());
+  std::_Exit(1);
+}
+
 }  // namespace
 
-GmshSession::GmshSession(const GmshSessionOptions& options) {
-  if (session_count++ == 0) gmsh_call([] { gmsh::initialize(0, nullptr, false); });
+GmshSession::GmshSession(const GmshSessionOptions& options) : previous_subject_(meshed_subject) {
+  if (!options.subject.empty()) meshed_subject = options.subject;
+  if (session_count++ == 0) {
+    previous_terminate = std::set_terminate(report_gmsh_failure);
+    gmsh_call([] { gmsh::initialize(0, nullptr, false); });
+  }
   gmsh_call([&] {
     gmsh::option::setNumber("General.Terminal", options.verbose ? 1 : 0);
     gmsh::option::setNumber("General.NumThreads", options.threads);
@@ -34,11 +65,13 @@ GmshSession::GmshSession(const GmshSessionOptions& options) {
 }
 
 GmshSession::~GmshSession() {
+  meshed_subject = previous_subject_;
   if (--session_count == 0) {
     try {
       gmsh::finalize();
     } catch (...) {  // a destructor must not throw; Gmsh is gone either way
     }
+    std::set_terminate(previous_terminate);
   }
 }
 

@@ -28,17 +28,29 @@ namespace hom::meshing {
 struct GmshSessionOptions {
   bool verbose = false;  ///< Gmsh's own messages on the terminal (General.Terminal)
   int threads = 1;       ///< General.NumThreads; 1 keeps meshing deterministic
+  std::string subject;   ///< what is meshed (a file name), for the message below
 };
 
 /// Initializes Gmsh (without reading the user's configuration files) for the
 /// lifetime of the object; nested sessions share one initialization. Not
 /// thread-safe: Gmsh's API is a global state.
+///
+/// Gmsh 4.8.4 meshes curves and surfaces inside OpenMP parallel loops (even
+/// on one thread), and an error there ("Impossible to mesh periodic surface
+/// 1", thrown as a std::string) cannot leave the loop: the runtime calls
+/// std::terminate. While a session is open, std::terminate prints
+/// "hom: <subject>: Gmsh failed: <its message>" on stderr and exits with
+/// status 1 instead of aborting; nothing after it runs, so no output file
+/// is begun.
 class GmshSession {
  public:
   explicit GmshSession(const GmshSessionOptions& options = {});
   ~GmshSession();
   GmshSession(const GmshSession&) = delete;
   GmshSession& operator=(const GmshSession&) = delete;
+
+ private:
+  std::string previous_subject_;
 };
 
 /// The current Gmsh model's mesh as MSH data: every entity (with its physical

@@ -33,7 +33,7 @@ SizedCube sized_cube(const SizedCubeOptions& o) {
     throw std::invalid_argument("sized_cube: need 0 < sphere diameter < side");
   if (!(o.inner_size > 0) || !(o.outer_size > 0) || !(o.grading > 0))
     throw std::invalid_argument("sized_cube: mesh sizes and grading must be positive");
-  const GmshSession session({o.verbose, 1});
+  const GmshSession session({o.verbose, 1, "the sized cube"});
   SizedCube out;
   out.center = Eigen::Vector3d::Constant(o.side / 2);
   gmsh_call([&] {

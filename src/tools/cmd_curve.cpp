@@ -272,6 +272,7 @@ int run(int argc, char** argv) {
   mo.size_min = o.size_min;
   mo.size_from_curvature = o.size_curvature;
   mo.threads = 1;
+  mo.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   if (!o.solids.empty()) mo.solids = solid_tags(cad, o.solids);
   if (o.model.empty() && o.size == 0.0) {
     // The built-in model: graded towards the cavity as in test_cad (about
