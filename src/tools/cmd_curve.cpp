@@ -262,9 +262,9 @@ int run(int argc, char** argv) {
     o.bl_layers = hom::tools::layers_from_options("curve", vm, o.bl_first, o.bl_growth, o.bl_total, o.bl_layers);
   check_options(o);
 
-  hom::cad::CadModel cad =
-      o.model.empty() ? hom::cad::cube_with_cavity_model()
-                      : hom::cad::read_cad(o.model, {.merge_small_edges = o.merge_small_edges});  // CadError names the file
+  // (read_cad's CadError names the file)
+  hom::cad::CadModel cad = o.model.empty() ? hom::cad::cube_with_cavity_model()
+                                           : hom::cad::read_cad(o.model, {.merge_small_edges = o.merge_small_edges});
   std::printf("%s\n", cad.summary().c_str());
   for (const auto& h : cad.healing()) std::printf("  healed: %s\n", h.c_str());
   hom::cad::CadMeshOptions mo;
