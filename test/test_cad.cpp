@@ -934,6 +934,14 @@ TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
   fairing.algorithm_2d = 6;  // Frontal-Delaunay everywhere, as asked: the slivers stay
   CHECK(longest_edge(cad::mesh_cad<Simplex<2>, WarpBlend, 3>(wing, fairing)) > 2 * size);
   CHECK(notes.size() == 1);
+  // t106's elements up to 94 long at size 46 have angles of 10 degrees: stretched, no slivers, kept.
+  const auto cascade = cad::read_cad((dir / "t106_turbine_cascade.step").string());
+  cad::CadMeshOptions blade;
+  blade.size_from_curvature = 24;
+  blade.progress = fairing.progress;
+  const auto cascade_mesh = cad::mesh_cad<Simplex<2>, WarpBlend, 3>(cascade, blade);
+  CHECK(longest_edge(cascade_mesh) > 2 * cad::default_mesh_size(cascade));
+  CHECK(notes.size() == 1);
   const auto sphere = cad::read_cad((dir / "sphere_nurbs_8patch_rhino.igs").string());
   CHECK(sphere.num_faces() >= 1);
   for (int f = 1; f <= sphere.num_faces(); ++f) {

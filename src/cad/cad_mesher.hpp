@@ -66,8 +66,8 @@ struct CadMeshOptions {
   int size_from_curvature = 0;   ///< Mesh.MeshSizeFromCurvature: elements per 2 pi radians; 0: off
   std::map<int, double> vertex_sizes;  ///< mesh size at model vertices (tag -> size)
   /// Mesh.Algorithm; 0: 6 (Frontal-Delaunay; 4.8.4's 8 crashes on surfaces
-  /// with a pole), with the faces where it leaves elements wider than twice
-  /// the size meshed again with MeshAdapt (1)
+  /// with a pole), with the faces where it leaves slivers (angles below 3
+  /// degrees) wider than twice the size meshed again with MeshAdapt (1)
   int algorithm_2d = 0;
   int algorithm_3d = 1;          ///< Mesh.Algorithm3D (1: Delaunay)
   int seed = 1;                  ///< Mesh.RandomSeed
