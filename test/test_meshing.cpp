@@ -185,7 +185,9 @@ TEST_CASE("analytic geometry and mesh from a Gmsh model") {
   gmsh::model::remove();
 }
 
+namespace {
 [[noreturn]] void throw_as_gmsh_does(const char* message) { throw std::string(message); }
+}  // namespace
 
 // A Gmsh error inside its OpenMP meshing loop reaches std::terminate (see
 // GmshSession). The child process stands for `hom curve`: it opens a session,
