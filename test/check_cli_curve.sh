@@ -11,7 +11,8 @@
 # CAD, bad boundary-layer options refused, and a layer too thick for the
 # domain stopped at its tangled linear stage with nothing written. A mesh
 # folded at a node that only held nodes determine writes no mesh but its VTU,
-# the failing cells marked.
+# the failing cells marked. --refine-invalid: bad uses refused; with
+# ../shared, an uncertified wing_fuselage mesh made valid by meshing finer.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -192,4 +193,36 @@ n = int(marked["inverted"].sum()) or int(marked["folded_at_node"].sum())
 assert n == int(sys.argv[2]), (n, sys.argv[2])
 assert marked["uncertified"].sum() == 0  # no --certify: nothing is marked uncertified
 PY
+
+# 9. --refine-invalid: refused where the model is not meshed here or with
+# --bl-first; a valid first try is not tried again. With ../shared (skipped
+# when absent): wing_fuselage.step at p = 2 with --size-min 14 leaves
+# tetrahedra uncertified at the fuselage's thin tail tip, and meshed finer
+# around them, tries later, it is certified valid.
+for args in "--refine-invalid -1" "--refine-invalid 1 --mesh $work/bib_1.msh" "--refine-invalid 1 --bl-first 0.01"; do
+  err=$("$hom" curve --p 2 -o "$work/refbad.msh" --threads 1 $args 2>&1 >/dev/null); rc=$?
+  [[ $rc -eq 2 && "$err" == *refine-invalid* ]] ||
+    fail "bad '$args': exit $rc, expected 2 naming --refine-invalid: $err"
+done
+[[ ! -e "$work/refbad.msh" ]] || fail "bad --refine-invalid: output written"
+log=$("$hom" curve --p 2 -o "$work/refined.msh" --threads 1 --certify --refine-invalid 2 2>&1); rc=$?
+[[ $rc -eq 0 && -s "$work/refined.msh" ]] || fail "built-in with --refine-invalid 2: exit $rc or no mesh"
+grep -q "^try 2" <<<"$log" && fail "built-in with --refine-invalid 2: a valid result was tried again"
+wing="$(dirname "$0")/../../shared/data/cad/wing_fuselage.step"
+if [[ -f "$wing" ]]; then
+  log=$("$hom" curve "$wing" --p 2 --certify --threads 2 --size-curvature 8 --size-min 14 --merge-small-edges 0.05 \
+        --refine-invalid 3 -o "$work/wing.msh" 2>&1); rc=$?
+  grep -E "^try|NOT CERTIFIED|^valid" <<<"$log" | sed 's/^/  [wing_fuselage] /'
+  grep -q "NOT CERTIFIED" <<<"$log" || fail "wing_fuselage: the first try was certified (nothing to refine)"
+  grep -q "^try 2 of 4: the model meshed again, finer around" <<<"$log" || fail "wing_fuselage: no second try"
+  [[ $rc -eq 0 && -s "$work/wing.msh" ]] || fail "wing_fuselage with --refine-invalid: exit $rc or no mesh"
+  [[ $(tail -n 5 <<<"$log" | grep -c "^valid:.*certified valid everywhere") -eq 1 ]] ||
+    fail "wing_fuselage: not certified"
+  # (Against the equilateral ideal: the vertices of 4 tetrahedra slid on the CAD faces until their straight-sided
+  # counterparts inverted, which hom quality's default ideal takes for inverted elements.)
+  "$hom" quality "$work/wing.msh" --certify --ideal equilateral >/dev/null ||
+    fail "wing_fuselage: hom quality --certify rejects the mesh"
+else
+  echo "  (../shared/data/cad absent: the wing_fuselage case skipped)"
+fi
 echo "OK"

@@ -519,6 +519,41 @@ TEST_CASE("meshing the cube with a cavity: every boundary node on the CAD") {
   }
 }
 
+TEST_CASE("local sizes (CadMeshOptions::local_sizes): finer inside the ball, even below size_min") {
+  const auto m = cad::cube_with_cavity_model();
+  const Eigen::Vector3d centre(5.0, 2.5, 2.5);  // on the cube's face x = 5, away from the cavity
+  // The mean length of the tetrahedra's edges whose midpoints lie within
+  // [r0, r1) of the ball's centre.
+  auto mean_edge = [&](const Mesh<Simplex<3>>& mesh, double r0, double r1) {
+    double sum = 0;
+    int n = 0;
+    for (int e = 0; e < mesh.num_elements(); ++e)
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          const Eigen::Vector3d a = mesh.node(mesh.vertex(e, i)), b = mesh.node(mesh.vertex(e, j));
+          const double r = ((a + b) / 2 - centre).norm();
+          if (r >= r0 && r < r1) sum += (a - b).norm(), ++n;
+        }
+    REQUIRE(n > 0);
+    return sum / n;
+  };
+  cad::CadMeshOptions o;
+  o.size = 1.0;
+  const auto plain = cad::mesh_cad<Simplex<3>>(m, o);
+  CHECK(mean_edge(plain, 0.0, 0.5) > 0.6);
+  o.local_sizes.push_back({centre, 1.0, 0.2});
+  const auto refined = cad::mesh_cad<Simplex<3>>(m, o);
+  CHECK(refined.num_elements() > plain.num_elements());
+  CHECK(mean_edge(refined, 0.0, 0.5) < 0.35);
+  // Two radii out (the ball's size grows back over one radius) the mesh is as coarse as before.
+  CHECK(mean_edge(refined, 2.5, 3.5) > 0.8 * mean_edge(plain, 2.5, 3.5));
+  // Gmsh's floor is global: a ball finer than size_min lowers it.
+  o.size_min = 0.8;
+  CHECK(mean_edge(cad::mesh_cad<Simplex<3>>(m, o), 0.0, 0.5) < 0.35);
+  o.local_sizes.push_back({centre, -1.0, 0.2});
+  CHECK_THROWS_AS(cad::mesh_cad<Simplex<3>>(m, o), std::invalid_argument);
+}
+
 TEST_CASE("a body and its far field that share no faces: mesh one solid (CadMeshOptions::solids)") {
   // The ball and the cube with a spherical cavity around it, assembled: two
   // sphere faces on the interface, one per solid (like a ring in a sphere

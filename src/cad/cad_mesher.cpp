@@ -250,6 +250,35 @@ std::vector<int> remesh_sliver_faces(double width) {
   return faces;
 }
 
+// The local sizes as Gmsh's background field: one Ball each, their minimum
+// (Gmsh then takes the smaller of it and the other sizes).
+void add_local_sizes(const std::vector<LocalSize>& balls, double scale, double max_size) {
+  namespace field = gmsh::model::mesh::field;
+  std::vector<double> tags;
+  for (const auto& b : balls) {
+    const int f = field::add("Ball");
+    field::setNumber(f, "Radius", b.radius);
+    field::setNumber(f, "Thickness", b.radius);
+    field::setNumber(f, "VIn", scale * b.size);
+    field::setNumber(f, "VOut", max_size);
+    field::setNumber(f, "XCenter", b.center.x());
+    field::setNumber(f, "YCenter", b.center.y());
+    field::setNumber(f, "ZCenter", b.center.z());
+    tags.push_back(f);
+  }
+  const int smallest = field::add("Min");
+  field::setNumbers(smallest, "FieldsList", tags);
+  field::setAsBackgroundMesh(smallest);
+}
+
+// Gmsh's floor on the size: size_min, lowered to the smallest local size.
+double size_floor(const CadMeshOptions& o) {
+  double floor = o.size_min;
+  if (floor > 0)
+    for (const auto& b : o.local_sizes) floor = std::min(floor, b.size);
+  return floor;
+}
+
 }  // namespace
 
 double default_mesh_size(const CadModel& cad) { return cad.size() / 20; }
@@ -264,6 +293,9 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       throw MeshingError(cad.name() + ": no solid " + std::to_string(s) + " (the model has " +
                          (cad.num_solids() == 0 ? std::string("no solids") : "solids 1.." + std::to_string(cad.num_solids())) +
                          ")");
+  for (const auto& b : o.local_sizes)
+    if (!(b.radius > 0 && b.size > 0) || !b.center.allFinite())
+      throw std::invalid_argument("hom::cad::cad_mesh_data: a local size needs a finite center, radius > 0, size > 0");
   const double size = cad.size();
   const double tol = o.tolerance * size;
   // Gmsh 4.8.4's quad subdivision puts the nodes it adds near, not on, the
@@ -285,7 +317,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       gmsh::option::setNumber("Mesh.Algorithm3D", o.algorithm_3d);
       gmsh::option::setNumber("Mesh.ElementOrder", 1);
       gmsh::option::setNumber("Mesh.MeshSizeMax", max_size);
-      if (o.size_min > 0) gmsh::option::setNumber("Mesh.MeshSizeMin", scale * o.size_min);
+      if (o.size_min > 0) gmsh::option::setNumber("Mesh.MeshSizeMin", scale * size_floor(o));
       gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", o.size_from_curvature);
       if (o.quads) {
         // Quadrilaterals only (hom reads one element family per mesh):
@@ -301,6 +333,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       gmsh::vectorpair imported;
       gmsh::model::occ::importShapesNativePointer(&cad.data().shape, imported, false);
       gmsh::model::occ::synchronize();
+      if (!o.local_sizes.empty()) add_local_sizes(o.local_sizes, scale, max_size);
 
       // Points: by position.
       gmsh::vectorpair points;

@@ -54,6 +54,16 @@ class MeshingError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A ball where the mesh is made finer: element size `size` within `radius`
+/// of `center`, growing linearly to the global size over another `radius`
+/// (Gmsh's Ball field). hom curve --refine-invalid puts one around each
+/// element that stayed invalid and meshes the model again.
+struct LocalSize {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+  double size = 0.0;
+};
+
 struct CadMeshOptions {
   int dim = 3;                   ///< 3: tetrahedra of the solids; 2: triangles / quads of the faces
   bool quads = false;            ///< 2D: recombine into quadrilaterals (Mesh.RecombineAll)
@@ -65,6 +75,10 @@ struct CadMeshOptions {
   double size_min = 0.0;         ///< Mesh.MeshSizeMin
   int size_from_curvature = 0;   ///< Mesh.MeshSizeFromCurvature: elements per 2 pi radians; 0: off
   std::map<int, double> vertex_sizes;  ///< mesh size at model vertices (tag -> size)
+  /// Balls meshed finer (the smallest size of the balls that hold a point
+  /// wins). Gmsh's floor Mesh.MeshSizeMin is global: a ball's size below
+  /// size_min lowers that floor to it everywhere.
+  std::vector<LocalSize> local_sizes;
   /// Mesh.Algorithm; 0: 6 (Frontal-Delaunay; 4.8.4's 8 crashes on surfaces
   /// with a pole), with the faces where it leaves slivers (angles below 3
   /// degrees) wider than twice the size meshed again with MeshAdapt (1)

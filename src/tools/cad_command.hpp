@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -86,6 +87,28 @@ void print_failing_elements(const cad::CurveResult<MeshT>& r, Pred failing, int 
   if (total > listed) std::fprintf(stderr, "  ... and %d more\n", total - listed);
 }
 
+/// Balls around the elements `failing(e)` picks, where the model is meshed
+/// again finer (hom curve --refine-invalid): each centred at its element's
+/// centroid, as wide as the element (the largest distance between two of its
+/// nodes), the size inside half that width.
+template <class MeshT, class Pred>
+std::vector<cad::LocalSize> balls_around(const MeshT& mesh, Pred failing) {
+  std::vector<cad::LocalSize> balls;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    if (!failing(e)) continue;
+    const auto x = mesh.element_coordinates(e);
+    double width = 0.0;
+    for (int i = 0; i < int(x.cols()); ++i)
+      for (int j = i + 1; j < int(x.cols()); ++j) width = std::max(width, (x.col(i) - x.col(j)).norm());
+    cad::LocalSize ball;
+    ball.center.head(x.rows()) = x.rowwise().mean();
+    ball.radius = width;
+    ball.size = width / 2;
+    balls.push_back(ball);
+  }
+  return balls;
+}
+
 inline void print_stage_table(const std::vector<cad::StageReport>& stages) {
   std::printf("\n  %-8s %-10s %8s %8s %7s %7s %7s %8s %5s %8s %8s\n", "part", "stage", "elements", "nodes", "Min", "Max",
               "Mean", "Std.Dev.", "#inv", "min SJ", "time s");
@@ -136,8 +159,11 @@ void classify_user_mesh(MeshT& mesh, const cad::CadModel& cad, double tolerance)
 /// CurveOptions::certify, every element certified valid. An invalid result writes
 /// no mesh: only the JSON report, which says what happened, and the VTU, whose
 /// fields mark the failing elements. Returns the exit status: 0 written, 3 invalid.
+/// With `retry` (another try follows), an invalid result writes nothing at all
+/// and the balls around its failing elements (balls_around) are put there.
 template <class MeshT>
-int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadCommandOptions& o, double t_linear) {
+int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadCommandOptions& o, double t_linear,
+                    std::vector<cad::LocalSize>* retry = nullptr) {
   using F = typename MeshT::family;
   constexpr int S = MeshT::space_dim;
   cad::CurveOptions co = o.curve;
@@ -172,27 +198,30 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   const bool valid = r.valid && folded_at_nodes == 0;
   const char* cmd = o.command.c_str();
   if (!valid) {
+    std::function<bool(int)> failing = [](int) { return false; };  // a boundary node off the CAD: no element
     if (r.inverted > 0) {
       std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; no mesh written\n",
                    cmd, r.inverted, r.mesh.num_elements());
-      print_failing_elements(r, [&](int e) { return !r.element_valid[e]; });
+      failing = [&](int e) { return !r.element_valid[e]; };
     } else if (!r.conformity.ok)
       std::fprintf(stderr, "hom: %s: INVALID result: %s; no mesh written\n", cmd, r.conformity.problem.c_str());
     else if (uncertified) {
-      const auto& failing = r.certification->uncertified;  // ascending
+      const auto& listed = r.certification->uncertified;  // ascending
       std::fprintf(stderr,
                    "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish between "
                    "quadrature points); no mesh written\n",
-                   cmd, int(failing.size()), r.mesh.num_elements());
-      print_failing_elements(r, [&](int e) { return std::binary_search(failing.begin(), failing.end(), e); });
+                   cmd, int(listed.size()), r.mesh.num_elements());
+      failing = [&](int e) { return std::binary_search(listed.begin(), listed.end(), e); };
     }
     else {
       std::fprintf(stderr,
                    "hom: %s: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
                    "valid: a fold at an element corner); no mesh written\n",
                    cmd, folded_at_nodes);
-      print_failing_elements(r, folded_at_a_node);
+      failing = folded_at_a_node;
     }
+    print_failing_elements(r, failing);
+    if (retry && !(*retry = balls_around(r.mesh, failing)).empty()) return 3;
   } else {
     std::printf("valid: every element valid at every quadrature point and node%s, every boundary node on its CAD entity\n",
                 r.certification ? " and certified valid everywhere" : "");

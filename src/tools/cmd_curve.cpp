@@ -2,7 +2,7 @@
 //           [--size H] [--size-min H] [--size-curvature N] [--solids TAGS] [--surface] [--quads]
 //           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
 //           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
-//           [--certify [--certify-depth N] [--certify-rounds N]]
+//           [--certify [--certify-depth N] [--certify-rounds N]] [--refine-invalid N]
 //           [--bl-first H [--bl-growth G] [--bl-layers N] [--bl-walls TAGS] [--bl-extrusion F]]
 //
 // Chapter 6's a posteriori generation of a curved high-order mesh from CAD
@@ -44,6 +44,12 @@
 // only; with --certify the layer mesh is certified and its folds between
 // quadrature points repaired, the wall held. A smoothed linear mesh that is
 // still tangled stops the pipeline there (exit 3).
+//
+// --refine-invalid N: when the result is invalid (or not certified), the
+// model is meshed again, finer in a ball around each failing element (half
+// its size, cad_mesher.hpp's LocalSize), and curved again, up to N times.
+// Where the model itself is too coarse for its mesh (a fuselage's tail tip
+// thinner than the elements there), this is what makes the result valid.
 //
 // Exit status: 0 valid mesh written; 3 the result is invalid (nothing
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
@@ -91,6 +97,7 @@ struct CurveCli {
   int threads = 0;
   double tolerance = 1e-6;
   int iterations_after_valid = -1;
+  int refine_invalid = 0;  ///< tries after the first, each meshing the model finer around the failing elements
   bool verbose = false;
   hom::tools::CertifyCli certify;
   double bl_first = 0.0;  ///< > 0: insert a boundary layer
@@ -158,6 +165,11 @@ void check_options(const CurveCli& o) {
   if (o.mesh.empty() == false && (o.size > 0 || o.size_min > 0 || o.size_curvature > 0 || !o.solids.empty()))
     throw UsageError(
         "curve: --size, --size-min, --size-curvature and --solids apply to the built-in mesher, not to --mesh");
+  if (o.refine_invalid < 0) throw UsageError("curve: --refine-invalid must be >= 0 (0: off)");
+  if (o.refine_invalid > 0 && !o.mesh.empty())
+    throw UsageError("curve: --refine-invalid meshes the model again; it does not apply to a --mesh");
+  if (o.refine_invalid > 0 && o.bl_first != 0.0)
+    throw UsageError("curve: --refine-invalid does not apply with --bl-first (the boundary-layer pipeline)");
   if (o.bl_first != 0.0) check_boundary_layer_options(o);
   else if (o.bl_options_given) throw UsageError("curve: the --bl-* options need --bl-first H (the first layer's height)");
 }
@@ -190,6 +202,29 @@ hom::tools::CadCommandOptions cad_command_options(const CurveCli& o) {
                                      : hom::cad::CurveOptions::Continuation::automatic;
   c.curve.iterations_after_valid = o.iterations_after_valid;
   return c;
+}
+
+/// The linear mesh of a planar (S = 2) or surface (S = 3) model.
+template <class Family, int S>
+auto faces_of(const hom::cad::CadModel& model, const hom::cad::CadMeshOptions& m) {
+  return hom::cad::mesh_cad<Family, hom::WarpBlend, S>(model, m);
+}
+
+/// Says what the next try of --refine-invalid changes.
+void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::cad::CadMeshOptions& m, int attempt,
+                      int attempts) {
+  double smallest = balls.front().size, largest = smallest;
+  for (const auto& b : balls) {
+    smallest = std::min(smallest, b.size);
+    largest = std::max(largest, b.size);
+  }
+  std::printf("\ntry %d of %d: the model meshed again, finer around the %d failing elements (size %.3g to %.3g there)",
+              attempt, attempts, int(balls.size()), smallest, largest);
+  double floor = m.size_min;  // Gmsh's, global (cad_mesher.hpp): lowered to the smallest ball's size
+  for (const auto& b : m.local_sizes) floor = std::min(floor, b.size);
+  if (floor > smallest) std::printf("; the size floor (--size-min) lowered from %.3g to %.3g", floor, smallest);
+  std::printf("\n");
+  std::fflush(stdout);
 }
 
 int run(int argc, char** argv) {
@@ -231,6 +266,9 @@ int run(int argc, char** argv) {
       ("pcont", po::value(&o.pcont)->default_value("auto"),
        "p-continuation of the volume stage: auto (when the initial mesh is tangled) | on | off")    //
       ("threads", po::value(&o.threads)->default_value(0), "threads (0: OpenMP's default)")         //
+      ("refine-invalid", po::value(&o.refine_invalid)->default_value(0),
+       "if the result is invalid or uncertified, mesh the model again finer around the failing elements and curve "
+       "again, up to N times (0: off)")  //
       ("iterations-after-valid", po::value(&o.iterations_after_valid)->default_value(-1),
        "volume stage: stop once valid this many iterations (-1: optimize to convergence)")         //
       ("tolerance", po::value(&o.tolerance)->default_value(1e-6),
@@ -287,7 +325,7 @@ int run(int argc, char** argv) {
                                  std::to_string(hom::cad::default_mesh_size(cad)) + ")");
 
   const hom::tools::CadCommandOptions co = cad_command_options(o);
-  const auto t0 = std::chrono::steady_clock::now();
+  auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   if (!o.mesh.empty()) {
     const auto data = hom::io::read_msh_data(o.mesh);
@@ -312,27 +350,41 @@ int run(int argc, char** argv) {
       }
     });
   }
+  // Meshes `model` (mesh_model(model, options)) and curves the mesh; with
+  // --refine-invalid an invalid result is tried again, the model meshed finer
+  // around its failing elements (the balls of earlier tries kept).
+  auto mesh_and_curve = [&](const hom::cad::CadModel& model, auto mesh_model) -> int {
+    hom::cad::CadMeshOptions m = mo;
+    for (int attempt = 0;; ++attempt) {
+      const bool last = attempt == o.refine_invalid;
+      std::vector<hom::cad::LocalSize> balls;
+      const auto linear = mesh_model(model, m);
+      const int status = hom::tools::curve_and_write(model, linear, co, elapsed(), last ? nullptr : &balls);
+      if (last || balls.empty()) return status;
+      print_refinement(balls, m, attempt + 2, o.refine_invalid + 1);
+      m.local_sizes.insert(m.local_sizes.end(), balls.begin(), balls.end());
+      t0 = std::chrono::steady_clock::now();
+    }
+  };
   if (cad.num_solids() > 0 && !o.surface) {
     if (o.quads) throw hom::tools::UsageError("curve: volume meshes are tetrahedral; --quads needs --surface");
-    const auto linear = hom::cad::mesh_cad<hom::Simplex<3>>(cad, mo);
-    if (o.bl_first > 0.0) return hom::tools::boundary_layer_and_write(cad, linear, boundary_layer_options(o), co);
-    return hom::tools::curve_and_write(cad, linear, co, elapsed());
+    auto tetrahedra = [](const hom::cad::CadModel& model, const hom::cad::CadMeshOptions& m) {
+      return hom::cad::mesh_cad<hom::Simplex<3>>(model, m);
+    };
+    if (o.bl_first > 0.0)
+      return hom::tools::boundary_layer_and_write(cad, tetrahedra(cad, mo), boundary_layer_options(o), co);
+    return mesh_and_curve(cad, tetrahedra);
   }
   if (o.bl_first > 0.0)
     throw hom::tools::UsageError("curve: --bl-first needs a model with solids (a tetrahedral mesh); " + cad.name() +
                                  " has none (for a planar mesh use hom boundary-layer)");
   if (auto placed = hom::cad::place_in_xy_plane(cad)) {
     if (placed->moved) std::printf("planar model: moved rigidly into the plane z = 0\n");
-    const auto& model = placed->model;
-    if (o.quads)
-      return hom::tools::curve_and_write(model, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 2>(model, mo), co,
-                                         elapsed());
-    return hom::tools::curve_and_write(model, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 2>(model, mo), co,
-                                       elapsed());
+    if (o.quads) return mesh_and_curve(placed->model, faces_of<hom::Cube<2>, 2>);
+    return mesh_and_curve(placed->model, faces_of<hom::Simplex<2>, 2>);
   }
-  if (o.quads)
-    return hom::tools::curve_and_write(cad, hom::cad::mesh_cad<hom::Cube<2>, hom::WarpBlend, 3>(cad, mo), co, elapsed());
-  return hom::tools::curve_and_write(cad, hom::cad::mesh_cad<hom::Simplex<2>, hom::WarpBlend, 3>(cad, mo), co, elapsed());
+  if (o.quads) return mesh_and_curve(cad, faces_of<hom::Cube<2>, 3>);
+  return mesh_and_curve(cad, faces_of<hom::Simplex<2>, 3>);
 }
 
 const hom::tools::RegisterCommand reg{{"curve", "Generate a curved high-order mesh from CAD (chapter 6)", run}};
