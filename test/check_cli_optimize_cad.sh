@@ -118,4 +118,29 @@ expect 2 "linear mesh" "$work/linear.msh" --cad "$work/sphere.brep"
 expect 2 "--ideal" "$work/perturbed.msh" --cad "$work/sphere.brep" --ideal equilateral
 expect 1 "missing.step" "$work/perturbed.msh" --cad "$work/missing.step"
 expect 2 "--cad" "$work/perturbed.msh"
+expect 2 "--merge-small-edges" "$work/perturbed.msh" --merge-small-edges 0.1
+expect 2 "--merge-small-edges" "$work/perturbed.msh" --cad "$work/sphere.brep" --merge-small-edges -1
+
+# 4. A square face whose left side is two edges, 9.97 and 0.03 long (test_cad's healing case): curved with
+# --merge-small-edges 0.1, the mesh lies on the healed model (4 edges), which hom optimize --cad reads with the
+# same option.
+"$py" - "$work/small_edge.brep" <<'PY' || fail "could not write the small-edge model (python3-gmsh)"
+import sys, gmsh
+gmsh.initialize()
+gmsh.option.setNumber("General.Terminal", 0)
+occ = gmsh.model.occ
+p = [occ.addPoint(x, y, 0) for x, y in [(0, 0), (10, 0), (10, 10), (0, 10), (0.001, 0.03)]]
+lines = [occ.addLine(p[i], p[(i + 1) % 5]) for i in range(5)]
+occ.addPlaneSurface([occ.addCurveLoop(lines)])
+occ.synchronize()
+gmsh.write(sys.argv[1])
+gmsh.finalize()
+PY
+log=$("$hom" curve "$work/small_edge.brep" --merge-small-edges 0.1 --p 3 --size 2 -o "$work/small.msh" --threads 1 2>&1) \
+  || { echo "$log"; fail "hom curve --merge-small-edges of the small-edge model failed"; }
+grep -q "healed: small edges" <<<"$log" || fail "small-edge model: no healing reported: $log"
+log=$("$hom" optimize "$work/small.msh" --cad "$work/small_edge.brep" --merge-small-edges 0.1 -o "$work/small.opt.msh" \
+        --threads 1 2>&1); rc=$?
+echo "$log" | grep -E "healed|valid" | sed 's/^/  [small edge] /'
+[[ $rc -eq 0 && -s "$work/small.opt.msh" ]] || fail "optimize --cad --merge-small-edges: exit $rc: $log"
 echo "cli optimize --cad: ok"

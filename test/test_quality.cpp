@@ -312,3 +312,78 @@ TEST_CASE_TEMPLATE("mesh quality: definitions 3.7-3.8 and the table row", F, Sim
   CHECK(*std::min_element(nodal.begin(), nodal.end()) < 0.5);
   CHECK(*std::max_element(nodal.begin(), nodal.end()) == doctest::Approx(1.0));
 }
+
+TEST_CASE("valid_ideal: det D phi_I > 0 at every vertex") {
+  IdealVertices<Simplex<2>> tri;
+  tri << 0, 1, 0, 0, 0, 1;
+  CHECK(valid_ideal<Simplex<2>>(tri));
+  tri.col(2) = Eigen::Vector2d(0.5, -0.05);  // below edge 0-1: inverted
+  CHECK_FALSE(valid_ideal<Simplex<2>>(tri));
+  tri.col(2) = Eigen::Vector2d(0.5, 0.0);  // on edge 0-1: flat
+  CHECK_FALSE(valid_ideal<Simplex<2>>(tri));
+  IdealVertices<Cube<2>> quad;  // vertices in cyclic order
+  quad << 0, 2, 2, 0, 0, 0, 1, 1;
+  CHECK(valid_ideal<Cube<2>>(quad));
+  quad.col(2) = Eigen::Vector2d(0.5, 0.5);  // a dart: vertex 2 reflex, det < 0 there only
+  CHECK_FALSE(valid_ideal<Cube<2>>(quad));
+  CHECK(valid_ideal<Simplex<3>>(regular_ideal_vertices<Simplex<3>>()));
+  CHECK(valid_ideal<Cube<3>>(regular_ideal_vertices<Cube<3>>()));
+  // The replacement is regular (equal edges), of the element's size, at its centroid.
+  const auto r = straight_sided_or_regular<Simplex<2>>(tri);
+  CHECK(valid_ideal<Simplex<2>>(r));
+  CHECK((r.col(0) - r.col(1)).norm() == doctest::Approx((r.col(1) - r.col(2)).norm()));
+  CHECK((r.rowwise().mean() - tri.rowwise().mean()).norm() < 1e-12);
+  CHECK((r.col(0) - r.col(1)).norm() > 0.5);
+}
+
+namespace {
+
+// A quadratic map of the reference triangle whose vertex triangle is inverted
+// (the third vertex lands just below edge 0-1) while the map itself keeps
+// det >= 0.85 (sampled): edge 0-1 bows far down, and edges 1-2 and 2-0 dip
+// below the third vertex, which becomes a convex corner. It is the P2
+// Lagrange interpolant of its six node images, so a degree-2 element
+// reproduces it exactly. In 3D the z coordinate is carried along.
+Eigen::Vector2d crescent(double x, double y) {
+  const double l0 = 1 - x - y, l1 = x, l2 = y;
+  const Eigen::Vector2d v0(0, 0), v1(1, 0), v2(0.5, -0.05), m01(0.5, -1), m12(0.75, -0.3), m20(0.25, -0.3);
+  return l0 * (2 * l0 - 1) * v0 + l1 * (2 * l1 - 1) * v1 + l2 * (2 * l2 - 1) * v2 + 4 * l0 * l1 * m01 +
+         4 * l1 * l2 * m12 + 4 * l2 * l0 * m20;
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("a valid curved element whose straight-sided counterpart is inverted is measured against the "
+                   "regular element",
+                   F, Simplex<2>, Simplex<3>) {
+  constexpr int D = F::dim;
+  using M = Mesh<F, WarpBlend, D>;
+  typename M::Coordinates x(D, F::num_vertices);
+  typename M::Connectivity c(F::num_vertices, 1);
+  for (int v = 0; v < F::num_vertices; ++v) {
+    x.col(v) = F::vertex(v);
+    c(v, 0) = v;
+  }
+  M mesh = elevate(M(1, x, c), 2);
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    auto n = mesh.nodes().col(i);
+    n.template head<2>() = crescent(n[0], n[1]);
+  }
+  mesh.reset_ideal();
+  REQUIRE_FALSE(valid_ideal<F>(IdealVertices<F>(mesh.ideal_vertices(0))));
+  CHECK(count_replaced_ideals(mesh) == 1);
+  // Independent reference: against the (valid) regular element the physical
+  // element is valid, as det D phi_P > 0.
+  const auto regular = mesh_quality(mesh, ShapeMeasure{}, IdealKind::regular);
+  REQUIRE(regular.inverted() == 0);
+  // Measured against its own inverted vertex element it would be inverted;
+  // the default ideal falls back to the regular element, and the shape
+  // measure ignores the fallback's size and position.
+  const auto own = mesh_quality(mesh, ShapeMeasure{});
+  CHECK(own.inverted() == 0);
+  CHECK(own.elements[0].quality == doctest::Approx(regular.elements[0].quality).epsilon(1e-10));
+  CHECK(valid_ideal<F>(mesh.straight_sided_ideal().vertices(0)));
+  const auto through_ideal_mesh =
+      mesh_quality(mesh, ShapeMeasure{}, mesh.straight_sided_ideal(), quadrature_for<F, DefaultExactness>(2));
+  CHECK(through_ideal_mesh.elements[0].quality == doctest::Approx(regular.elements[0].quality).epsilon(1e-10));
+}

@@ -271,15 +271,14 @@ void add_local_sizes(const std::vector<LocalSize>& balls, double scale, double m
   field::setAsBackgroundMesh(smallest);
 }
 
-// Gmsh's floor on the size: size_min, lowered to the smallest local size.
+}  // namespace
+
 double size_floor(const CadMeshOptions& o) {
   double floor = o.size_min;
   if (floor > 0)
     for (const auto& b : o.local_sizes) floor = std::min(floor, b.size);
   return floor;
 }
-
-}  // namespace
 
 double default_mesh_size(const CadModel& cad) { return cad.size() / 20; }
 
@@ -303,7 +302,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   // their entity if they are within `loose` of it.
   const double loose = o.quads ? 1e-3 * size : tol;
   const double scale = o.quads ? 2.0 : 1.0;  // sizes before the quad subdivision (below)
-  const meshing::GmshSession session({o.verbose, o.threads, cad.name()});
+  const meshing::GmshSession session({o.verbose, o.threads, cad.name(), o.time_limit_s});
   io::MshData d;
   std::map<int, int> maps[4];  // Gmsh tag -> model tag, per dimension
   const double max_size = scale * (o.size > 0 ? o.size : default_mesh_size(cad));

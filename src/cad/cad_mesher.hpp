@@ -87,6 +87,9 @@ struct CadMeshOptions {
   int seed = 1;                  ///< Mesh.RandomSeed
   int threads = 1;               ///< General.NumThreads (1: deterministic)
   bool verbose = false;          ///< Gmsh's messages on the terminal
+  /// > 0: meshing that takes longer (wall seconds) ends the process with a
+  /// message and status 1 (GmshSessionOptions::time_limit_s); 0: no limit
+  double time_limit_s = 0.0;
   double tolerance = 1e-8;       ///< classification tolerance, relative to the model's size
   /// Solids to keep (model tags), empty: all. The others are meshed too
   /// (Gmsh meshes the model whole) but left out of the result with their
@@ -103,6 +106,10 @@ struct CadMeshOptions {
 /// The element size used when CadMeshOptions::size is 0: the model's
 /// bounding-box diagonal / 20.
 double default_mesh_size(const CadModel& cad);
+
+/// Gmsh's global floor on the element size (Mesh.MeshSizeMin): size_min,
+/// lowered to the smallest local size; 0 when size_min is 0 (no floor).
+double size_floor(const CadMeshOptions& o);
 
 /// Meshes the model with Gmsh and returns the mesh as MSH data with the
 /// model's entity tags (see above); nodes keep their parametric coordinates.

@@ -6,12 +6,16 @@
 #include <gmsh.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -52,7 +56,41 @@ std::string meshed_subject;  // GmshSessionOptions::subject of the innermost ses
 
 }  // namespace
 
+// Waits for the session's end or its time limit, whichever comes first; at
+// the limit Gmsh is still inside a call that cannot be interrupted, so the
+// process ends (nothing after meshing has run, so no output file is begun).
+struct GmshSession::Watchdog {
+  std::mutex mutex;
+  std::condition_variable session_over;
+  bool over = false;
+  std::thread thread;
+
+  Watchdog(double seconds, std::string subject) {
+    thread = std::thread([this, seconds, subject = std::move(subject)] {
+      std::unique_lock lock(mutex);
+      if (session_over.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return over; })) return;
+      std::fflush(stdout);
+      std::fprintf(stderr,
+                   "hom: %s: Gmsh did not finish meshing within %g s (Gmsh 4.8 loops forever on some surfaces, "
+                   "a cone's apex for one)\n",
+                   subject.empty() ? "meshing" : subject.c_str(), seconds);
+      std::_Exit(1);
+    });
+  }
+  ~Watchdog() {
+    {
+      const std::lock_guard lock(mutex);
+      over = true;
+    }
+    session_over.notify_one();
+    thread.join();
+  }
+};
+
 GmshSession::GmshSession(const GmshSessionOptions& options) : previous_subject_(meshed_subject) {
+  if (options.time_limit_s < 0 || !std::isfinite(options.time_limit_s))
+    throw std::invalid_argument("hom::meshing::GmshSession: the time limit must be finite and >= 0");
+  if (options.time_limit_s > 0) watchdog_ = std::make_unique<Watchdog>(options.time_limit_s, options.subject);
   if (!options.subject.empty()) meshed_subject = options.subject;
   if (session_count++ == 0) {
     previous_terminate = std::set_terminate(report_gmsh_failure);
@@ -65,6 +103,7 @@ GmshSession::GmshSession(const GmshSessionOptions& options) : previous_subject_(
 }
 
 GmshSession::~GmshSession() {
+  watchdog_.reset();
   meshed_subject = previous_subject_;
   if (--session_count == 0) {
     try {

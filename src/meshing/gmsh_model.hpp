@@ -15,6 +15,7 @@
 /// surfaces (curves in 2D), model entities with their bounding entities, and
 /// physical groups.
 
+#include <memory>
 #include <string>
 
 #include "hom/element/family.hpp"
@@ -29,6 +30,9 @@ struct GmshSessionOptions {
   bool verbose = false;  ///< Gmsh's own messages on the terminal (General.Terminal)
   int threads = 1;       ///< General.NumThreads; 1 keeps meshing deterministic
   std::string subject;   ///< what is meshed (a file name), for the message below
+  /// > 0: a session open longer than this many seconds (wall time) ends the
+  /// process with a message and status 1 (see GmshSession); 0: no limit.
+  double time_limit_s = 0.0;
 };
 
 /// Initializes Gmsh (without reading the user's configuration files) for the
@@ -42,6 +46,12 @@ struct GmshSessionOptions {
 /// "hom: <subject>: Gmsh failed: <its message>" on stderr and exits with
 /// status 1 instead of aborting; nothing after it runs, so no output file
 /// is begun.
+///
+/// Gmsh 4.8.4 also loops forever on some surfaces (an OpenCASCADE cone's
+/// apex: refineMeshBDS / smooth_point_centroid never return), and a running
+/// Gmsh call cannot be interrupted. With a time limit, a watchdog thread
+/// prints "hom: <subject>: Gmsh did not finish meshing within N s" on stderr
+/// and exits with status 1 when the session outlives it.
 class GmshSession {
  public:
   explicit GmshSession(const GmshSessionOptions& options = {});
@@ -50,7 +60,9 @@ class GmshSession {
   GmshSession& operator=(const GmshSession&) = delete;
 
  private:
+  struct Watchdog;
   std::string previous_subject_;
+  std::unique_ptr<Watchdog> watchdog_;
 };
 
 /// The current Gmsh model's mesh as MSH data: every entity (with its physical

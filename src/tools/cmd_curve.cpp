@@ -2,7 +2,7 @@
 //           [--size H] [--size-min H] [--size-curvature N] [--solids TAGS] [--surface] [--quads]
 //           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
 //           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
-//           [--certify [--certify-depth N] [--certify-rounds N]] [--refine-invalid N]
+//           [--certify [--certify-depth N] [--certify-rounds N]] [--refine-invalid N] [--mesh-time-limit S]
 //           [--bl-first H [--bl-growth G] [--bl-layers N] [--bl-walls TAGS] [--bl-extrusion F]]
 //
 // Chapter 6's a posteriori generation of a curved high-order mesh from CAD
@@ -56,6 +56,7 @@
 // options.
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -87,6 +88,7 @@ struct CurveCli {
   double size = 0.0;
   double size_min = 0.0;
   double merge_small_edges = 0.0;
+  double mesh_time_limit = 600.0;  ///< seconds Gmsh may take to mesh the model (0: no limit)
   int size_curvature = 0;
   std::string solids;  ///< --solids: model solid tags, comma-separated (empty: all)
   bool surface = false;
@@ -153,6 +155,8 @@ void check_options(const CurveCli& o) {
     throw UsageError("curve: --pcont must be auto, on or off, got '" + o.pcont + "'");
   if (o.size < 0) throw UsageError("curve: --size must be positive");
   if (o.size_min < 0) throw UsageError("curve: --size-min must be >= 0");
+  if (!(o.mesh_time_limit >= 0) || !std::isfinite(o.mesh_time_limit))
+    throw UsageError("curve: --mesh-time-limit must be a number of seconds >= 0");
   if (o.size_min > 0 && o.size > 0 && o.size_min > o.size)
     throw UsageError("curve: --size-min must not exceed --size");
   if (o.size_curvature < 0) throw UsageError("curve: --size-curvature must be >= 0");
@@ -220,8 +224,7 @@ void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::
   }
   std::printf("\ntry %d of %d: the model meshed again, finer around the %d failing elements (size %.3g to %.3g there)",
               attempt, attempts, int(balls.size()), smallest, largest);
-  double floor = m.size_min;  // Gmsh's, global (cad_mesher.hpp): lowered to the smallest ball's size
-  for (const auto& b : m.local_sizes) floor = std::min(floor, b.size);
+  const double floor = hom::cad::size_floor(m);  // before the new balls; 0 when --size-min is 0
   if (floor > smallest) std::printf("; the size floor (--size-min) lowered from %.3g to %.3g", floor, smallest);
   std::printf("\n");
   std::fflush(stdout);
@@ -255,6 +258,9 @@ int run(int argc, char** argv) {
        "elements per 2 pi radians of curvature (0: off)")                                            //
       ("merge-small-edges", po::value(&o.merge_small_edges)->default_value(0.0),
        "heal the model: drop CAD edges shorter than this, joining their neighbours (0: off)")  //
+      ("mesh-time-limit", po::value(&o.mesh_time_limit)->default_value(600.0),
+       "seconds Gmsh may take to mesh the model, then exit 1 with a message (Gmsh 4.8 loops forever on some "
+       "surfaces, a cone's apex for one; 0: no limit)")  //
       ("solids", po::value(&o.solids),
        "mesh only these solids (model tags, comma-separated; default all): one region of a model whose "
        "solids touch without sharing faces")  //
@@ -310,6 +316,7 @@ int run(int argc, char** argv) {
   mo.size_min = o.size_min;
   mo.size_from_curvature = o.size_curvature;
   mo.threads = 1;
+  mo.time_limit_s = o.mesh_time_limit;
   mo.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   if (!o.solids.empty()) mo.solids = solid_tags(cad, o.solids);
   if (o.model.empty() && o.size == 0.0) {

@@ -73,8 +73,16 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
               std::string(F::name).c_str(), mesh.degree(), mesh.num_elements(), mesh.num_nodes());
   if (surface)
     std::printf("surface measure (chapter 5, eq 5.5), oriented by each element's straight-sided facet\n");
-  std::printf("measure %s, ideal %s, quadrature %s (exact to degree %d, %d points per element)\n\n",
+  std::printf("measure %s, ideal %s, quadrature %s (exact to degree %d, %d points per element)\n",
               std::string(Measure::name).c_str(), ideal_name.c_str(), o.quadrature.c_str(), rule.exactness, rule.size());
+  if constexpr (!surface) {
+    const int replaced = ideal == hom::IdealKind::regular ? 0 : hom::count_replaced_ideals(mesh);
+    if (replaced > 0)
+      std::printf("(%d elements measured against the equilateral element: their straight-sided counterparts are "
+                  "inverted or flat, their vertices moved)\n",
+                  replaced);
+  }
+  std::printf("\n");
   std::printf("  %-16s %8s %8s %8s %9s %6s\n", "", "Min", "Max", "Mean", "Std.Dev.", "#inv");
   print_row("quality", qs);
   print_row("scaled Jacobian", sj);

@@ -302,12 +302,14 @@ class Mesh {
     for (int k = 0; k < num_vertices; ++k) x += l[k] * ideal_.col(elements_(k, e));
     return x;
   }
-  /// The ideal as the quality module's per-element ideal (planar/volume meshes).
+  /// The ideal as the quality module's per-element ideal (planar/volume
+  /// meshes); an inverted or flat straight-sided element gives way to the
+  /// regular one (straight_sided_or_regular).
   IdealMesh<Family> straight_sided_ideal() const
     requires(SpaceDim == Family::dim)
   {
     std::vector<IdealVertices<Family>> v(num_elements());
-    for (int e = 0; e < num_elements(); ++e) v[e] = ideal_vertices(e);
+    for (int e = 0; e < num_elements(); ++e) v[e] = straight_sided_or_regular<Family>(ideal_vertices(e));
     return IdealMesh<Family>(std::move(v));
   }
 

@@ -14,6 +14,7 @@
 ///   - affine per element: a user-given matrix A_e, ideal = A_e (reference
 ///     element) - for example a stretched boundary-layer element.
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -78,6 +79,40 @@ IdealVertices<Family> regular_ideal_vertices() {
     for (int i = 0; i < Family::num_vertices; ++i) v.col(i) = (Family::vertex(i).array() + 1.0) / 2.0;
   }
   return v;
+}
+
+/// Whether phi_I is orientation-preserving: det D phi_I > 0 at every vertex,
+/// relative to the element's size (remark 3.1: the ideal must be valid, or
+/// phi_E = phi_P o phi_I^{-1} inverts a valid physical element). phi_I is
+/// affine on simplices, so one determinant decides; on cubes the corner
+/// determinants are the usual criterion (exact for quadrilaterals).
+template <ElementFamily Family>
+bool valid_ideal(const IdealVertices<Family>& v) {
+  constexpr int D = Family::dim;
+  double diameter = 0.0;
+  for (int i = 0; i < Family::num_vertices; ++i)
+    for (int j = i + 1; j < Family::num_vertices; ++j) diameter = std::max(diameter, (v.col(i) - v.col(j)).norm());
+  const double flat = 1e-12 * std::pow(diameter, D);  // below this the element is flat to rounding
+  for (int i = 0; i < Family::num_vertices; ++i)
+    if (!(ideal_jacobian<Family>(v, Family::vertex(i)).determinant() > flat)) return false;
+  return true;
+}
+
+/// v itself when it is a valid ideal; otherwise the regular element of the
+/// same root-mean-square size, centred at v's centroid. A mesh whose vertex
+/// nodes were moved (curved onto CAD, untangled) can hold elements whose
+/// straight-sided counterpart is inverted or flat while the curved element is
+/// valid; those are measured against the regular element instead (section 3.1.2).
+template <ElementFamily Family>
+IdealVertices<Family> straight_sided_or_regular(const IdealVertices<Family>& v) {
+  if (valid_ideal<Family>(v)) return v;
+  const IdealVertices<Family> r = regular_ideal_vertices<Family>();
+  const auto rms_radius = [](const IdealVertices<Family>& w) {
+    return std::sqrt((w.colwise() - w.rowwise().mean()).colwise().squaredNorm().mean());
+  };
+  const double size = rms_radius(v);
+  const double scale = size > 0 && std::isfinite(size) ? size / rms_radius(r) : 1.0;
+  return ((r.colwise() - r.rowwise().mean()) * scale).colwise() + v.rowwise().mean();
 }
 
 /// One straight-sided ideal element per mesh element.

@@ -57,10 +57,23 @@ struct MeshQuality {
   }
 };
 
-/// The ideal vertices of element e for the requested kind.
+/// The ideal vertices of element e for the requested kind; a straight-sided
+/// ideal that is inverted or flat gives way to the regular element
+/// (straight_sided_or_regular).
 template <ElementFamily Family, NodeSet Nodes>
 IdealVertices<Family> ideal_for(const Mesh<Family, Nodes, Family::dim>& mesh, int e, IdealKind kind) {
-  return kind == IdealKind::regular ? regular_ideal_vertices<Family>() : IdealVertices<Family>(mesh.ideal_vertices(e));
+  if (kind == IdealKind::regular) return regular_ideal_vertices<Family>();
+  return straight_sided_or_regular<Family>(IdealVertices<Family>(mesh.ideal_vertices(e)));
+}
+
+/// How many elements' straight-sided ideals are inverted or flat, so that
+/// ideal_for measures them against the regular element.
+template <ElementFamily Family, NodeSet Nodes>
+int count_replaced_ideals(const Mesh<Family, Nodes, Family::dim>& mesh) {
+  int n = 0;
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    n += !valid_ideal<Family>(IdealVertices<Family>(mesh.ideal_vertices(e)));
+  return n;
 }
 
 namespace detail {
