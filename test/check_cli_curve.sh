@@ -13,6 +13,7 @@
 # folded at a node that only held nodes determine writes no mesh but its VTU,
 # the failing cells marked. --refine-invalid: bad uses refused; with
 # ../shared, an uncertified wing_fuselage mesh made valid by meshing finer.
+# --size-ball and --vertex-size grade the mesh where they say.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -91,7 +92,8 @@ grep -q "Gmsh did not finish meshing within 0.001 s" <<<"$err" || fail "mesh tim
 for args in "--p 1 -o $work/b.msh" "--p 3 -o $work/b.vtu" "--p 3 -o $work/b.msh --measure foo" \
             "--p 3 -o $work/b.msh --solver foo" "--p 3 -o $work/b.msh --quads" \
             "--p 2 -o $work/b.msh --size-min -1" "--p 2 -o $work/b.msh --size 0.5 --size-min 1" \
-            "--p 2 -o $work/b.msh --merge-small-edges 0.1" "$work/any.brep --p 2 -o $work/b.msh --merge-small-edges -1" \
+            "--p 2 -o $work/b.msh --merge-small-edges 0.1" \
+            "$work/any.brep --p 2 -o $work/b.msh --merge-small-edges -1" \
             "--p 2 -o $work/b.msh --mesh-time-limit -1" "--p 2 -o $work/b.msh --mesh-time-limit nan"; do
   "$hom" curve $args >/dev/null 2>&1; rc=$?
   [[ $rc -eq 2 ]] || fail "bad options '$args': exit $rc, expected 2"
@@ -229,8 +231,83 @@ if [[ -f "$wing" ]]; then
   # The vertices of a few tetrahedra slid on the CAD faces until their straight-sided counterparts inverted:
   # hom quality measures those against the equilateral element and says so.
   quality=$("$hom" quality "$work/wing.msh" --certify) || fail "wing_fuselage: hom quality --certify rejects the mesh"
-  grep -E "elements measured against the equilateral element" <<<"$quality" | sed 's/^/  [wing_fuselage] /'
+  grep -q "elements measured against the equilateral element: their straight-sided counterparts are inverted" \
+    <<<"$quality" || fail "wing_fuselage: hom quality does not say which ideal replaced the inverted ones: $quality"
 else
   echo "  (../shared/data/cad absent: the wing_fuselage case skipped)"
 fi
+
+# 10. Size fields (thesis section 4.3.3): on the two-solid model's body (the
+# box [0.4, 0.6]^3, size 0.1), --size-ball at its corner (0.4, 0.4, 0.4) and
+# --vertex-size at that corner's model vertex (its tag from `hom info
+# --vertices`) each give more linear elements than the plain run and more
+# nodes within 0.05 of the corner. A ball on a planar model follows the
+# model into z = 0. Bad values are refused with exit 2 and nothing written.
+nodes_near() {  # nodes_near IN.msh X Y Z R: the number of IN's nodes within R of (X, Y, Z)
+  "$py" - "$@" <<'PY'
+import sys
+import gmsh
+c, r = [float(a) for a in sys.argv[2:5]], float(sys.argv[5])
+gmsh.initialize()
+gmsh.option.setNumber("General.Terminal", 0)
+gmsh.open(sys.argv[1])
+_, x, _ = gmsh.model.mesh.getNodes()
+print(sum(1 for i in range(0, len(x), 3) if sum((x[i + k] - c[k]) ** 2 for k in range(3)) < r * r))
+gmsh.finalize()
+PY
+}
+vertices=$("$hom" info "$work/bib.brep" --vertices) || fail "hom info --vertices failed"
+n_vertices=$(sed -n 's/^vertices: *\([0-9]*\)$/\1/p' <<<"$vertices")
+[[ $(grep -c "^vertex [0-9]*: " <<<"$vertices") -eq $n_vertices && $n_vertices -gt 8 ]] ||
+  fail "hom info --vertices: not one line per vertex: $vertices"
+# Each of the two solids has its own vertex there (the interface is copied).
+corner=$(awk '/^vertex [0-9]*: 0.4 0.4 0.4$/ { sub(":", "", $2); printf "%s%s", sep, $2; sep = "," }' <<<"$vertices")
+[[ $corner =~ ^[0-9]+,[0-9]+$ ]] || fail "hom info --vertices: not two vertices at (0.4, 0.4, 0.4): $vertices"
+declare -A n_sized n_near
+for sized in plain "--size-ball 0.4,0.4,0.4,0.05,0.015" "--vertex-size $corner=0.015"; do
+  key=${sized%% *}
+  log=$("$hom" curve "$work/bib.brep" --solids 1 --p 2 --size 0.1 -o "$work/sized.msh" --json "$work/sized.json" \
+        --threads 1 $([[ $sized == plain ]] || echo "$sized") 2>&1) || { echo "$log"; fail "$sized: hom curve failed"; }
+  n_sized[$key]=$(json_field "$work/sized.json" volume linear elements)
+  n_near[$key]=$(nodes_near "$work/sized.msh" 0.4 0.4 0.4 0.05) || fail "$sized: could not read the mesh (python3-gmsh)"
+  echo "  [size field] ${sized}: ${n_sized[$key]} tetrahedra, ${n_near[$key]} nodes within 0.05 of the corner"
+done
+for key in --size-ball --vertex-size; do
+  [[ ${n_sized[$key]} -gt ${n_sized[plain]} && ${n_near[$key]} -gt ${n_near[plain]} ]] ||
+    fail "$key: ${n_sized[$key]} tetrahedra and ${n_near[$key]} nodes near the corner, not more than the plain run's"
+done
+for args in "--size-ball 0.4,0.4,0.4,0.05" "--size-ball 0.4,0.4,0.4,0,0.01" "--size-ball 0.4,0.4,0.4,0.05,nan" \
+            "--size-ball 0.4,0.4,x,0.05,0.01" "--vertex-size $((n_vertices + 1))=0.02" "--vertex-size 0=0.02" \
+            "--vertex-size 1" "--vertex-size 1=0" "--vertex-size 1=0.01 --size-min 0.05" \
+            "--size-ball 0.4,0.4,0.4,0.05,0.01 --mesh x.msh"; do
+  err=$("$hom" curve "$work/bib.brep" --solids 1 --p 2 --size 0.1 -o "$work/sizebad.msh" --threads 1 $args \
+        2>&1 >/dev/null); rc=$?
+  [[ $rc -eq 2 && ( "$err" == *size-ball* || "$err" == *vertex-size* ) ]] ||
+    fail "bad size field '$args': exit $rc, expected 2 naming the option: $err"
+done
+[[ ! -e "$work/sizebad.msh" ]] || fail "bad size field: output written"
+# The unit square in the plane z = 5 is meshed in z = 0; a ball at its
+# corner (0, 0, 5) refines it at (0, 0, 0).
+"$py" - "$work/square5.brep" <<'PY' || fail "could not write the square (python3-gmsh)"
+import sys
+import gmsh
+gmsh.initialize()
+gmsh.option.setNumber("General.Terminal", 0)
+gmsh.model.occ.addRectangle(0, 0, 5, 1, 1)
+gmsh.model.occ.synchronize()
+gmsh.write(sys.argv[1])
+gmsh.finalize()
+PY
+near=()
+for ball in "" "--size-ball 0,0,5,0.1,0.01"; do
+  "$hom" curve "$work/square5.brep" --p 2 --size 0.2 -o "$work/square5.msh" --threads 1 $ball >/dev/null 2>&1 ||
+    fail "the square in z = 5 $ball: hom curve failed"
+  near+=($(nodes_near "$work/square5.msh" 0 0 0 0.1))
+done
+[[ ${near[1]} -gt $((10 * near[0])) ]] || fail "--size-ball on a moved planar model: ${near[*]} nodes near its corner"
+"$hom" info "$work/sized.msh" --vertices >/dev/null 2>&1
+[[ $? -eq 2 ]] || fail "hom info --vertices of a mesh: not exit 2"
+# A negative coordinate is a value, not an option.
+"$hom" curve "$work/bib.brep" --solids 1 --p 2 --size 0.1 -o "$work/sizeneg.msh" --threads 1 \
+  --size-ball -0.4,0.4,0.4,0.05,0.05 >/dev/null 2>&1 || fail "--size-ball -0.4,...: refused"
 echo "OK"

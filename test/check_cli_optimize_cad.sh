@@ -136,7 +136,8 @@ occ.synchronize()
 gmsh.write(sys.argv[1])
 gmsh.finalize()
 PY
-log=$("$hom" curve "$work/small_edge.brep" --merge-small-edges 0.1 --p 3 --size 2 -o "$work/small.msh" --threads 1 2>&1) \
+log=$("$hom" curve "$work/small_edge.brep" --merge-small-edges 0.1 --p 3 --size 2 -o "$work/small.msh" \
+  --threads 1 2>&1) \
   || { echo "$log"; fail "hom curve --merge-small-edges of the small-edge model failed"; }
 grep -q "healed: small edges" <<<"$log" || fail "small-edge model: no healing reported: $log"
 log=$("$hom" optimize "$work/small.msh" --cad "$work/small_edge.brep" --merge-small-edges 0.1 -o "$work/small.opt.msh" \

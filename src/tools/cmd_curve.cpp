@@ -1,5 +1,6 @@
 // hom curve [MODEL.step|.stp|.iges|.igs|.brep] [--mesh LINEAR.msh] [--p P (2)] [-o OUT.msh (curved.msh)]
-//           [--size H] [--size-min H] [--size-curvature N] [--solids TAGS] [--surface] [--quads]
+//           [--size H] [--size-min H] [--size-curvature N] [--size-ball X,Y,Z,R,H]... [--vertex-size TAGS=H]...
+//           [--solids TAGS] [--surface] [--quads]
 //           [--measure shape|oddy] [--solver newton|matrix-free|gauss-seidel|auto]
 //           [--pcont auto|on|off] [--threads N] [--vtu OUT.vtu] [--json FILE] [-v]
 //           [--certify [--certify-depth N] [--certify-rounds N]] [--refine-invalid N] [--mesh-time-limit S]
@@ -16,7 +17,10 @@
 //
 // What is meshed: tetrahedra when the model has solids (unless --surface);
 // a planar model (all faces in one plane) gives a planar mesh in z = 0
-// (moved there if needed); other models a surface mesh. --quads asks for
+// (moved there if needed); other models a surface mesh. Sizes: --size
+// (the largest), --size-min, --size-curvature, and size fields as in thesis
+// section 4.3.3: --size-ball (size H within distance R of a point, in the
+// model's coordinates) and --vertex-size (size H at model vertices). --quads asks for
 // quadrilaterals (surface and planar meshes). --solids keeps the mesh of
 // some solids (and, with --surface, of their faces): one region of a model
 // whose solids touch without sharing faces, such as a body and the far
@@ -55,12 +59,15 @@
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
 // options.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include <boost/program_options.hpp>
 
@@ -91,6 +98,8 @@ struct CurveCli {
   double mesh_time_limit = 600.0;  ///< seconds Gmsh may take to mesh the model (0: no limit)
   int size_curvature = 0;
   std::string solids;  ///< --solids: model solid tags, comma-separated (empty: all)
+  std::vector<std::string> size_balls;    ///< --size-ball X,Y,Z,R,H (repeatable)
+  std::vector<std::string> vertex_sizes;  ///< --vertex-size TAGS=H (repeatable)
   bool surface = false;
   bool quads = false;
   std::string measure = "shape";
@@ -166,9 +175,10 @@ void check_options(const CurveCli& o) {
   if (o.merge_small_edges > 0 && o.model.empty())
     throw UsageError("curve: --merge-small-edges needs a MODEL file (the built-in model has no small edges)");
   o.certify.check("curve");
-  if (o.mesh.empty() == false && (o.size > 0 || o.size_min > 0 || o.size_curvature > 0 || !o.solids.empty()))
-    throw UsageError(
-        "curve: --size, --size-min, --size-curvature and --solids apply to the built-in mesher, not to --mesh");
+  if (o.mesh.empty() == false && (o.size > 0 || o.size_min > 0 || o.size_curvature > 0 || !o.solids.empty() ||
+                                  !o.size_balls.empty() || !o.vertex_sizes.empty()))
+    throw UsageError("curve: --size, --size-min, --size-curvature, --size-ball, --vertex-size and --solids apply to "
+                     "the built-in mesher, not to --mesh");
   if (o.refine_invalid < 0) throw UsageError("curve: --refine-invalid must be >= 0 (0: off)");
   if (o.refine_invalid > 0 && !o.mesh.empty())
     throw UsageError("curve: --refine-invalid meshes the model again; it does not apply to a --mesh");
@@ -187,6 +197,41 @@ std::vector<int> solid_tags(const hom::cad::CadModel& cad, const std::string& li
                                    (cad.num_solids() == 0 ? std::string(" has no solids")
                                                           : " has solids 1.." + std::to_string(cad.num_solids())));
   return tags;
+}
+
+/// --size-ball X,Y,Z,R,H: elements of size H within distance R of (X, Y, Z),
+/// the size field of thesis section 4.3.3 (0.1 in a sphere, 2 elsewhere).
+hom::cad::LocalSize size_ball(const std::string& text) {
+  const auto v = hom::tools::parse_number_list("curve", "--size-ball", text);
+  const bool finite = std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  if (v.size() != 5 || !finite || !(v[3] > 0) || !(v[4] > 0))
+    throw hom::tools::UsageError("curve: --size-ball " + text +
+                                 ": expected X,Y,Z,R,H, five numbers with radius R > 0 and size H > 0");
+  return {.center = Eigen::Vector3d(v[0], v[1], v[2]), .radius = v[3], .size = v[4]};
+}
+
+/// --vertex-size TAGS=H: size H at these model vertices, checked against the
+/// model; a later option wins for a vertex named twice.
+void add_vertex_sizes(const hom::cad::CadModel& cad, const std::string& text, double size_min,
+                      std::map<int, double>& sizes) {
+  using hom::tools::UsageError;
+  const auto eq = text.find('=');
+  if (eq == std::string::npos)
+    throw UsageError("curve: --vertex-size " + text +
+                     ": expected TAGS=H, model vertex tags and a size, e.g. 3,7=0.05");
+  const auto tags = hom::tools::parse_tag_list("curve", "--vertex-size", text.substr(0, eq));
+  const auto h = hom::tools::parse_number_list("curve", "--vertex-size", text.substr(eq + 1));
+  if (h.size() != 1 || !std::isfinite(h[0]) || !(h[0] > 0))
+    throw UsageError("curve: --vertex-size " + text + ": the size after '=' must be one number > 0");
+  // Gmsh clamps every size to Mesh.MeshSizeMin: a smaller one would be ignored without a word.
+  if (h[0] < size_min)
+    throw UsageError("curve: --vertex-size " + text + ": the size is below --size-min, which Gmsh would keep");
+  for (int v : tags) {
+    if (v < 1 || v > cad.num_vertices())
+      throw UsageError("curve: --vertex-size " + std::to_string(v) + ": " + cad.name() + " has vertices 1.." +
+                       std::to_string(cad.num_vertices()));
+    sizes[v] = h[0];
+  }
 }
 
 /// The boundary layer's settings; the walls checked against the model later.
@@ -261,6 +306,11 @@ int run(int argc, char** argv) {
       ("mesh-time-limit", po::value(&o.mesh_time_limit)->default_value(600.0),
        "seconds Gmsh may take to mesh the model, then exit 1 with a message (Gmsh 4.8 loops forever on some "
        "surfaces, a cone's apex for one; 0: no limit)")  //
+      ("size-ball", po::value(&o.size_balls)->composing(),
+       "X,Y,Z,R,H: elements of size H within distance R of the point (X, Y, Z), growing to --size outside "
+       "(repeatable)")  //
+      ("vertex-size", po::value(&o.vertex_sizes)->composing(),
+       "TAGS=H: elements of size H at these model vertices (comma-separated tags; repeatable)")  //
       ("solids", po::value(&o.solids),
        "mesh only these solids (model tags, comma-separated; default all): one region of a model whose "
        "solids touch without sharing faces")  //
@@ -319,6 +369,7 @@ int run(int argc, char** argv) {
   mo.time_limit_s = o.mesh_time_limit;
   mo.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   if (!o.solids.empty()) mo.solids = solid_tags(cad, o.solids);
+  for (const auto& b : o.size_balls) mo.local_sizes.push_back(size_ball(b));
   if (o.model.empty() && o.size == 0.0) {
     // The built-in model: graded towards the cavity as in test_cad (about
     // 1400 tetrahedra; table 4.1's mesh is of this kind).
@@ -326,6 +377,7 @@ int run(int argc, char** argv) {
     for (int v = 1; v <= cad.num_vertices(); ++v)
       mo.vertex_sizes[v] = (cad.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
   }
+  for (const auto& v : o.vertex_sizes) add_vertex_sizes(cad, v, o.size_min, mo.vertex_sizes);
   if (mo.size == 0.0 && o.size_min > hom::cad::default_mesh_size(cad))
     throw hom::tools::UsageError("curve: --size-min " + std::to_string(o.size_min) +
                                  " exceeds the default size (model size / 20 = " +
@@ -386,7 +438,10 @@ int run(int argc, char** argv) {
     throw hom::tools::UsageError("curve: --bl-first needs a model with solids (a tetrahedral mesh); " + cad.name() +
                                  " has none (for a planar mesh use hom boundary-layer)");
   if (auto placed = hom::cad::place_in_xy_plane(cad)) {
-    if (placed->moved) std::printf("planar model: moved rigidly into the plane z = 0\n");
+    if (placed->moved) {
+      std::printf("planar model: moved rigidly into the plane z = 0\n");
+      for (auto& b : mo.local_sizes) b.center = placed->rotation * b.center + placed->translation;  // --size-ball
+    }
     if (o.quads) return mesh_and_curve(placed->model, faces_of<hom::Cube<2>, 2>);
     return mesh_and_curve(placed->model, faces_of<hom::Simplex<2>, 2>);
   }

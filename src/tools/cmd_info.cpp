@@ -1,11 +1,12 @@
-// hom info MESH | MODEL.step|.iges|.brep
+// hom info MESH | MODEL.step|.iges|.brep [--vertices]
 //
 // Prints what a Gmsh mesh file holds: format, element types and counts, the
 // mesh hom reads from it (family, order, nodes, node classification,
 // topology), entities, physical groups and bounding box. For a CAD file
 // (STEP, IGES, BREP by extension; src/cad): the healed model's solids,
 // shells, faces, edges and vertices, surface and curve kinds, healing,
-// validity and bounding box.
+// validity and bounding box; with --vertices, each model vertex's tag and
+// position (hom curve --vertex-size takes those tags).
 
 #include <iomanip>
 #include <iostream>
@@ -44,7 +45,9 @@ bool is_cad_file(const std::string& path) {
   }
 }
 
-int describe_cad(const std::string& path) {
+/// The model's summary; with `vertices`, each model vertex's tag and position
+/// (the tags `hom curve --vertex-size` takes).
+int describe_cad(const std::string& path, bool vertices) {
   const auto m = hom::cad::read_cad(path);
   const auto box = m.bounding_box();
   auto kinds = [](const std::map<std::string, int>& k) {
@@ -70,6 +73,9 @@ int describe_cad(const std::string& path) {
   o << "valid:           " << (m.valid() ? "yes" : "no") << " (BRepCheck_Analyzer)\n";
   o << "healing:         " << (m.healing().empty() ? std::string("none needed") : m.healing().front()) << "\n";
   for (std::size_t i = 1; i < m.healing().size(); ++i) o << "                 " << m.healing()[i] << "\n";
+  if (vertices)
+    for (int v = 1; v <= m.num_vertices(); ++v)
+      o << "vertex " << v << ": " << m.vertex(v)[0] << " " << m.vertex(v)[1] << " " << m.vertex(v)[2] << "\n";
   std::cout << o.str();
   return 0;
 }
@@ -77,15 +83,21 @@ int describe_cad(const std::string& path) {
 
 int run(int argc, char** argv) {
   po::options_description opts(
-      "hom info MESH | MODEL.step|.iges|.brep\n\nDescribe a Gmsh .msh file or a CAD model.\n\noptions");
-  opts.add_options()("help,h", "show this help");
+      "hom info MESH | MODEL.step|.iges|.brep [--vertices]\n\nDescribe a Gmsh .msh file or a CAD model.\n\noptions");
+  bool vertices = false;
+  opts.add_options()("help,h", "show this help")  //
+      ("vertices", po::bool_switch(&vertices),
+       "a CAD model: list its vertices, tag and position (the tags of hom curve --vertex-size)");
   po::variables_map vm;
   if (!hom::tools::parse_options("info", argc, argv, opts, {{"mesh", po::value<std::string>()}}, vm)) return 0;
   if (!vm.count("mesh")) throw hom::tools::UsageError("info: need a mesh file (see 'hom info --help')");
   const std::string path = vm["mesh"].as<std::string>();
 #ifdef HOM_HAVE_CAD
-  if (is_cad_file(path)) return describe_cad(path);
+  if (is_cad_file(path)) return describe_cad(path, vertices);
 #endif
+  if (vertices)
+    throw hom::tools::UsageError("info: --vertices lists the vertices of a CAD model (.step, .iges, .brep), not of " +
+                                 path);
   const auto data = hom::io::read_msh_data(path);
   const auto s = hom::io::summarize(data);
 

@@ -60,6 +60,7 @@
 #include "hom/quality/mesh_quality.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
+#include "replaced_ideals_note.hpp"
 #ifdef HOM_HAVE_CURVE
 #include <chrono>
 
@@ -151,10 +152,8 @@ int optimize_mesh(MeshT& mesh, const Measure& measure, const OptimizeCli& o, con
   // stay inverted, so those are measured against the regular element
   // (straight_sided_or_regular).
   const int replaced_ideals = ideal == hom::IdealKind::straight_sided ? hom::count_replaced_ideals(mesh) : 0;
-  if (replaced_ideals > 0)
-    std::printf("(%d elements measured against the equilateral element: their vertices are tangled, so their "
-                "straight-sided ideal is inverted or flat)\n\n",
-                replaced_ideals);
+  hom::tools::print_replaced_ideals_note(replaced_ideals);
+  if (replaced_ideals > 0) std::printf("\n");
   std::printf("  %-16s %8s %8s %8s %9s %6s\n", "", "Min", "Max", "Mean", "Std.Dev.", "#inv");
   const hom::MeshQuality initial = hom::mesh_quality(mesh, measure, ideal, rule);
   print_stage("initial", initial);

@@ -35,6 +35,7 @@
 #include "hom/surface/surface_mesh_quality.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
+#include "replaced_ideals_note.hpp"
 
 namespace po = boost::program_options;
 
@@ -76,11 +77,7 @@ int report(const MeshT& mesh, const Measure& measure, const QualityOptions& o) {
   std::printf("measure %s, ideal %s, quadrature %s (exact to degree %d, %d points per element)\n",
               std::string(Measure::name).c_str(), ideal_name.c_str(), o.quadrature.c_str(), rule.exactness, rule.size());
   if constexpr (!surface) {
-    const int replaced = ideal == hom::IdealKind::regular ? 0 : hom::count_replaced_ideals(mesh);
-    if (replaced > 0)
-      std::printf("(%d elements measured against the equilateral element: their straight-sided counterparts are "
-                  "inverted or flat, their vertices moved)\n",
-                  replaced);
+    if (ideal != hom::IdealKind::regular) hom::tools::print_replaced_ideals_note(hom::count_replaced_ideals(mesh));
   }
   std::printf("\n");
   std::printf("  %-16s %8s %8s %8s %9s %6s\n", "", "Min", "Max", "Mean", "Std.Dev.", "#inv");
