@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <random>
@@ -552,6 +553,35 @@ TEST_CASE("local sizes (CadMeshOptions::local_sizes): finer inside the ball, eve
   CHECK(mean_edge(cad::mesh_cad<Simplex<3>>(m, o), 0.0, 0.5) < 0.35);
   o.local_sizes.push_back({centre, -1.0, 0.2});
   CHECK_THROWS_AS(cad::mesh_cad<Simplex<3>>(m, o), std::invalid_argument);
+}
+
+TEST_CASE("check_size_fields names the first bad ball or vertex size") {
+  const auto m = cad::cube_with_cavity_model();
+  auto message = [&](const cad::CadMeshOptions& o) -> std::string {
+    try {
+      cad::check_size_fields(m, o);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  cad::CadMeshOptions o;
+  o.local_sizes.push_back({Eigen::Vector3d::Zero(), 1.0, 0.2});
+  o.vertex_sizes[m.num_vertices()] = 0.3;
+  CHECK(message(o).empty());
+  o.local_sizes.push_back({Eigen::Vector3d(0, std::nan(""), 0), 1.0, 0.2});
+  CHECK(message(o).find("local size 2") != std::string::npos);
+  o.local_sizes.back().center.y() = 0;
+  o.local_sizes.back().size = std::numeric_limits<double>::infinity();
+  CHECK(message(o).find("local size 2") != std::string::npos);
+  o.local_sizes.pop_back();
+  o.vertex_sizes[m.num_vertices() + 1] = 0.3;
+  CHECK(message(o).find("vertex " + std::to_string(m.num_vertices() + 1)) != std::string::npos);
+  o.vertex_sizes.erase(m.num_vertices() + 1);
+  o.vertex_sizes[1] = 0.0;
+  CHECK(message(o).find("vertex 1:") != std::string::npos);
+  // cad_mesh_data refuses them before meshing.
+  CHECK_THROWS_AS(cad::cad_mesh_data(m, o), std::invalid_argument);
 }
 
 TEST_CASE("a body and its far field that share no faces: mesh one solid (CadMeshOptions::solids)") {

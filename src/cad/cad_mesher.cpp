@@ -282,6 +282,22 @@ double size_floor(const CadMeshOptions& o) {
 
 double default_mesh_size(const CadModel& cad) { return cad.size() / 20; }
 
+void check_size_fields(const CadModel& cad, const CadMeshOptions& o) {
+  for (std::size_t i = 0; i < o.local_sizes.size(); ++i) {
+    const auto& b = o.local_sizes[i];
+    if (!(b.radius > 0 && b.size > 0 && std::isfinite(b.radius) && std::isfinite(b.size)) || !b.center.allFinite())
+      throw std::invalid_argument("local size " + std::to_string(i + 1) +
+                                  ": needs a finite center, a finite radius > 0 and a finite size > 0");
+  }
+  for (const auto& [v, h] : o.vertex_sizes) {
+    if (v < 1 || v > cad.num_vertices())
+      throw std::invalid_argument("vertex size at vertex " + std::to_string(v) + ": " + cad.name() +
+                                  " has vertices 1.." + std::to_string(cad.num_vertices()));
+    if (!(h > 0 && std::isfinite(h)))
+      throw std::invalid_argument("vertex size at vertex " + std::to_string(v) + ": needs a finite size > 0");
+  }
+}
+
 io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   if (o.dim != 2 && o.dim != 3) throw std::invalid_argument("hom::cad::cad_mesh_data: dim must be 2 or 3");
   if (cad.num_faces() == 0) throw MeshingError(cad.name() + ": the model has no faces to mesh");
@@ -292,9 +308,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       throw MeshingError(cad.name() + ": no solid " + std::to_string(s) + " (the model has " +
                          (cad.num_solids() == 0 ? std::string("no solids") : "solids 1.." + std::to_string(cad.num_solids())) +
                          ")");
-  for (const auto& b : o.local_sizes)
-    if (!(b.radius > 0 && b.size > 0) || !b.center.allFinite())
-      throw std::invalid_argument("hom::cad::cad_mesh_data: a local size needs a finite center, radius > 0, size > 0");
+  check_size_fields(cad, o);
   const double size = cad.size();
   const double tol = o.tolerance * size;
   // Gmsh 4.8.4's quad subdivision puts the nodes it adds near, not on, the

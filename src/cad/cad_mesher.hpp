@@ -111,9 +111,15 @@ double default_mesh_size(const CadModel& cad);
 /// lowered to the smallest local size; 0 when size_min is 0 (no floor).
 double size_floor(const CadMeshOptions& o);
 
+/// Throws std::invalid_argument naming the first bad entry of the size
+/// fields: a local size without a finite center, radius > 0 and size > 0,
+/// or a vertex size at a tag outside 1..num_vertices or not finite and > 0.
+/// cad_mesh_data checks them first; a caller may check them before meshing.
+void check_size_fields(const CadModel& cad, const CadMeshOptions& o);
+
 /// Meshes the model with Gmsh and returns the mesh as MSH data with the
 /// model's entity tags (see above); nodes keep their parametric coordinates.
-/// Throws MeshingError.
+/// Throws MeshingError; std::invalid_argument for bad options.
 io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& options = {});
 
 /// The mesh of Family (Simplex<3>; Simplex<2> / Cube<2> with SpaceDim 3 for

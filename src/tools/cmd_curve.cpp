@@ -210,10 +210,10 @@ hom::cad::LocalSize size_ball(const std::string& text) {
   return {.center = Eigen::Vector3d(v[0], v[1], v[2]), .radius = v[3], .size = v[4]};
 }
 
-/// --vertex-size TAGS=H: size H at these model vertices, checked against the
-/// model; a later option wins for a vertex named twice.
-void add_vertex_sizes(const hom::cad::CadModel& cad, const std::string& text, double size_min,
-                      std::map<int, double>& sizes) {
+/// --vertex-size TAGS=H: size H at these model vertices (the tags are checked
+/// against the model with the other size fields); a later option wins for a
+/// vertex named twice.
+void add_vertex_sizes(const std::string& text, double size_min, std::map<int, double>& sizes) {
   using hom::tools::UsageError;
   const auto eq = text.find('=');
   if (eq == std::string::npos)
@@ -226,12 +226,7 @@ void add_vertex_sizes(const hom::cad::CadModel& cad, const std::string& text, do
   // Gmsh clamps every size to Mesh.MeshSizeMin: a smaller one would be ignored without a word.
   if (h[0] < size_min)
     throw UsageError("curve: --vertex-size " + text + ": the size is below --size-min, which Gmsh would keep");
-  for (int v : tags) {
-    if (v < 1 || v > cad.num_vertices())
-      throw UsageError("curve: --vertex-size " + std::to_string(v) + ": " + cad.name() + " has vertices 1.." +
-                       std::to_string(cad.num_vertices()));
-    sizes[v] = h[0];
-  }
+  for (int v : tags) sizes[v] = h[0];
 }
 
 /// The boundary layer's settings; the walls checked against the model later.
@@ -377,7 +372,12 @@ int run(int argc, char** argv) {
     for (int v = 1; v <= cad.num_vertices(); ++v)
       mo.vertex_sizes[v] = (cad.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.2 : 1.62;
   }
-  for (const auto& v : o.vertex_sizes) add_vertex_sizes(cad, v, o.size_min, mo.vertex_sizes);
+  for (const auto& v : o.vertex_sizes) add_vertex_sizes(v, o.size_min, mo.vertex_sizes);
+  try {
+    hom::cad::check_size_fields(cad, mo);  // the balls are checked as read: only a tag can be wrong here
+  } catch (const std::invalid_argument& e) {
+    throw hom::tools::UsageError(std::string("curve: --vertex-size: ") + e.what());
+  }
   if (mo.size == 0.0 && o.size_min > hom::cad::default_mesh_size(cad))
     throw hom::tools::UsageError("curve: --size-min " + std::to_string(o.size_min) +
                                  " exceeds the default size (model size / 20 = " +
