@@ -18,6 +18,7 @@
 #include <numbers>
 #include <random>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -821,6 +822,76 @@ TEST_CASE("a triangle ear (two edges on one curve at a corner) is split into thr
     CHECK(boundary == 4);  // the outline V A C B is unchanged
     CHECK(cad::split_triangle_ears(d, plane) == 0);
   }
+}
+
+TEST_CASE("a volume mesh's boundary ear is split with the tetrahedra on it: same volume, orientation, conforming") {
+  // The ear V A B of the test above on face 1 (z = 0) between two solids:
+  // tetrahedron 1 (V B A X), X = (0, 0.5, -1), and tetrahedron 3 (V A B Y),
+  // Y = (0, 0.5, 1), share it; tetrahedron 2 (A B C X) shares a face with 1.
+  io::MshData d;
+  add_ear_test_nodes(d, {EntityId{1, 1}, EntityId{1, 1}, EntityId{1, 1}, EntityId{2, 1}});
+  for (const auto& [tag, z] : {std::pair{5, -1.0}, std::pair{6, 1.0}}) {
+    io::MshNode n;
+    n.tag = tag;
+    n.x = {0, 0.5, z};
+    n.entity = EntityId{3, tag - 4};
+    d.nodes.push_back(n);
+  }
+  add_msh_element(d, 1, 1, 1, {3, 1});
+  add_msh_element(d, 1, 1, 1, {1, 2});
+  add_msh_element(d, 2, 2, 1, {1, 2, 3});
+  add_msh_element(d, 2, 2, 1, {2, 4, 3});
+  add_msh_element(d, 4, 3, 1, {1, 3, 2, 5});
+  add_msh_element(d, 4, 3, 1, {2, 3, 4, 5});
+  add_msh_element(d, 4, 3, 2, {1, 2, 3, 6});
+  std::map<std::int64_t, Eigen::Vector3d> at;
+  auto signed_volume = [&](std::span<const std::int64_t> n) {
+    const Eigen::Vector3d a = at.at(n[0]);
+    return (at.at(n[1]) - a).dot((at.at(n[2]) - a).cross(at.at(n[3]) - a)) / 6;
+  };
+  auto volumes = [&] {  // the signed volume of each solid's tetrahedra, and their number
+    for (const auto& n : d.nodes) at[n.tag] = Eigen::Vector3d(n.x[0], n.x[1], n.x[2]);
+    std::map<int, std::pair<double, int>> out;
+    for (const auto& e : d.elements)
+      if (e.type == 4) {
+        const double v = signed_volume(d.nodes_of(e));
+        CHECK(v > 0.0);  // the input's orientation, every piece
+        out[e.entity.tag].first += v;
+        ++out[e.entity.tag].second;
+      }
+    return out;
+  };
+  const auto before = volumes();
+  const cad::FaceGeometry plane{[](int, const Eigen::Vector3d& p) { return Eigen::Vector2d(p.x(), p.y()); },
+                                [](int, const Eigen::Vector2d& uv) { return Eigen::Vector3d(uv.x(), uv.y(), 0.0); }};
+  CHECK(cad::split_triangle_ears(d, plane) == 1);
+  const auto after = volumes();
+  CHECK(after.at(1).second == 3 + 1);
+  CHECK(after.at(2).second == 3);
+  for (int solid : {1, 2}) CHECK(after.at(solid).first == doctest::Approx(before.at(solid).first));
+  // Conforming: each triangle of a tetrahedron is shared by at most two, and
+  // the outline of the two solids (8 triangles) is unchanged.
+  std::map<std::array<std::int64_t, 3>, int> face_uses;
+  std::set<std::int64_t> tags;
+  for (const auto& e : d.elements) {
+    CHECK(tags.insert(e.tag).second);
+    if (e.type != 4) continue;
+    const auto n = d.nodes_of(e);
+    for (int apex = 0; apex < 4; ++apex) {
+      std::array<std::int64_t, 3> f{};
+      for (int i = 0, k = 0; i < 4; ++i)
+        if (i != apex) f[k++] = n[i];
+      std::sort(f.begin(), f.end());
+      ++face_uses[f];
+    }
+  }
+  int outline = 0;
+  for (const auto& [f, uses] : face_uses) {
+    CHECK(uses <= 2);
+    outline += uses == 1;
+  }
+  CHECK(outline == 8);
+  CHECK(cad::split_triangle_ears(d, plane) == 0);
 }
 
 TEST_CASE("a triangle whose corner joins two curves tangentially (G1) is an ear; at a kink it is not") {

@@ -69,7 +69,8 @@ struct CadMeshOptions {
   bool quads = false;            ///< 2D: recombine into quadrilaterals (Mesh.RecombineAll)
   /// 2D triangles: split the ears (ears.hpp; quadrilateral ears are always
   /// split). mesh_cad sets it for surface meshes; a planar mesh's are split
-  /// by the curving pipeline (hom/mesh/flat_corners.hpp).
+  /// by the curving pipeline (hom/mesh/flat_corners.hpp). A volume mesh's
+  /// boundary ears are always split, each with the tetrahedron on it.
   bool split_triangle_ears = false;
   double size = 0.0;             ///< Mesh.MeshSizeMax; 0: default_mesh_size(model)
   double size_min = 0.0;         ///< Mesh.MeshSizeMin

@@ -19,10 +19,17 @@ namespace {
 constexpr int gmsh_line = 1;
 constexpr int gmsh_triangle = 2;
 constexpr int gmsh_quad = 3;
+constexpr int gmsh_tetrahedron = 4;
 
 using Edge = std::pair<std::int64_t, std::int64_t>;
+using Triangle = std::array<std::int64_t, 3>;
 
 Edge edge_key(std::int64_t a, std::int64_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
+
+Triangle triangle_key(Triangle t) {
+  std::sort(t.begin(), t.end());
+  return t;
+}
 
 /// What both splits share: the curve of each boundary line, node lookup, new
 /// nodes on a face, and the rebuilt element list.
@@ -107,8 +114,14 @@ class EarSplitter {
     elements_.push_back(e);
   }
 
-  /// Replaces d's elements with those added.
+  /// Records that the boundary triangle with these corners was split at
+  /// node `centre`: the tetrahedron on it is split there too (finish).
+  void split_face_at(const Triangle& corners, std::int64_t centre) { face_centres_[triangle_key(corners)] = centre; }
+
+  /// Replaces d's elements with those added, each tetrahedron on a split
+  /// boundary triangle split at that triangle's new node.
   void finish() {
+    if (!face_centres_.empty()) split_tetrahedra();
     d_.elements = std::move(elements_);
     d_.element_nodes = std::move(element_nodes_);
   }
@@ -121,6 +134,55 @@ class EarSplitter {
   std::int64_t next_node_ = 0, next_element_ = 0;
   std::vector<io::MshElement> elements_;
   std::vector<std::int64_t> element_nodes_;
+  std::map<Triangle, std::int64_t> face_centres_;
+
+  /// The new node of a split triangle among the faces of tetrahedron t, and
+  /// the local index of the vertex opposite it; {-1, -1} if none.
+  std::pair<std::int64_t, int> split_face_of(const std::array<std::int64_t, 4>& t) const {
+    for (int apex = 0; apex < 4; ++apex) {
+      Triangle face{};
+      for (int i = 0, k = 0; i < 4; ++i)
+        if (i != apex) face[k++] = t[i];
+      if (const auto c = face_centres_.find(triangle_key(face)); c != face_centres_.end()) return {c->second, apex};
+    }
+    return {-1, -1};
+  }
+
+  /// A tetrahedron on a split boundary triangle becomes three: in its node
+  /// order, each of the triangle's corners in turn replaced by the new node
+  /// c, so each keeps the orientation (c lies on the triangle: the piece's
+  /// volume is c's barycentric coordinate times the whole). A piece that
+  /// holds a second split triangle is split again.
+  void split_tetrahedra() {
+    std::vector<io::MshElement> elements = std::move(elements_);
+    std::vector<std::int64_t> nodes = std::move(element_nodes_);
+    elements_.clear();
+    element_nodes_.clear();
+    for (const auto& e : elements) {
+      std::vector<std::array<std::int64_t, 4>> pending;
+      if (e.type == gmsh_tetrahedron && e.num_nodes == 4)
+        pending.push_back({nodes[e.first], nodes[e.first + 1], nodes[e.first + 2], nodes[e.first + 3]});
+      else
+        add(e, std::span<const std::int64_t>(nodes.data() + e.first, std::size_t(e.num_nodes)));
+      bool first = true;
+      while (!pending.empty()) {
+        const auto t = pending.back();
+        pending.pop_back();
+        const auto [centre, apex] = split_face_of(t);
+        if (centre < 0) {
+          add(e, t, !first);
+          first = false;
+          continue;
+        }
+        for (int i = 0; i < 4; ++i)
+          if (i != apex) {
+            auto piece = t;
+            piece[i] = centre;
+            pending.push_back(piece);
+          }
+      }
+    }
+  }
 };
 
 /// Runs split(splitter, element, corners, ear corner) on every ear of type `type` (N
@@ -168,10 +230,12 @@ void split_quad_ear(EarSplitter& s, const io::MshElement& e, const std::array<st
   s.add(e, inner, true);
 }
 
-/// A triangle ear into three around its centre, projected onto the face.
+/// A triangle ear into three around its centre, projected onto the face
+/// (and the tetrahedron on it, if any, into three at the same node).
 void split_triangle_ear(EarSplitter& s, const io::MshElement& e, const std::array<std::int64_t, 3>& t, int) {
   const Eigen::Vector3d centre = (s.position(t[0]) + s.position(t[1]) + s.position(t[2])) / 3;
   const std::int64_t c = s.face_node(e.entity.tag, centre);
+  s.split_face_at(t, c);
   for (int i = 0; i < 3; ++i) {
     const std::array<std::int64_t, 3> piece{t[i], t[(i + 1) % 3], c};
     s.add(e, piece, i > 0);

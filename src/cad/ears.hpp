@@ -51,8 +51,14 @@ int split_quad_ears(io::MshData& d, const FaceGeometry& faces);
 
 /// The same for the 3-node triangles of `d` (Gmsh type 2, on face entities):
 /// each ear becomes three triangles around a new node at its centre,
-/// projected onto its face, with the ear's orientation and entity. Returns
-/// the number of ears split.
+/// projected onto its face, with the ear's orientation and entity. A
+/// 4-node tetrahedron of `d` (type 4) with the ear as a face becomes three at
+/// the same node, each with one of the ear's edges, the tetrahedron's
+/// orientation and entity (in a volume mesh the corner's two edges on the
+/// curve, curved, leave it in opposite directions, so det D phi = 0 there
+/// for the tetrahedron too, and the ear's third edge, on the boundary, is
+/// not one the flat-corner split of hom/mesh/flat_corners.hpp may split).
+/// Returns the number of ears split.
 int split_triangle_ears(io::MshData& d, const FaceGeometry& faces);
 
 }  // namespace hom::cad
