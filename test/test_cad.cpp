@@ -894,6 +894,47 @@ TEST_CASE("a volume mesh's boundary ear is split with the tetrahedra on it: same
   CHECK(cad::split_triangle_ears(d, plane) == 0);
 }
 
+TEST_CASE("a volume ear is kept where the projected centre would invert a piece of its tetrahedron") {
+  // The ear V A B (z = 0 here) with tetrahedron V A B Y, Y = (0, 0.5, 1),
+  // on a face that the test's geometry bends towards Y: the centre
+  // (0, 1/3, 0) projects to (0, 1/3, h). At h = 0.5 every piece keeps its
+  // orientation; at h = 2 the centre is past the plane V B Y, so the piece
+  // V c B Y would be inverted, and the ear is left as it is.
+  for (const auto& [h, ears] : {std::pair{0.5, 1}, std::pair{2.0, 0}}) {
+    CAPTURE(h);
+    io::MshData d;
+    add_ear_test_nodes(d, {EntityId{1, 1}, EntityId{1, 1}, EntityId{1, 1}, EntityId{2, 1}});
+    io::MshNode y;
+    y.tag = 5;
+    y.x = {0, 0.5, 1};
+    y.entity = EntityId{3, 1};
+    d.nodes.push_back(y);
+    add_msh_element(d, 1, 1, 1, {3, 1});
+    add_msh_element(d, 1, 1, 1, {1, 2});
+    add_msh_element(d, 2, 2, 1, {1, 2, 3});
+    add_msh_element(d, 4, 3, 1, {1, 2, 3, 5});
+    const double height = h;
+    const cad::FaceGeometry bent{[](int, const Eigen::Vector3d& p) { return Eigen::Vector2d(p.x(), p.y()); },
+                                 [height](int, const Eigen::Vector2d& uv) {
+                                   return Eigen::Vector3d(uv.x(), uv.y(), height * (uv.y() > 0.2));
+                                 }};
+    const std::size_t nodes = d.nodes.size(), elements = d.elements.size();
+    CHECK(cad::split_triangle_ears(d, bent) == ears);
+    CHECK(d.nodes.size() == nodes + std::size_t(ears));
+    CHECK(d.elements.size() == elements + std::size_t(4 * ears));  // 2 more triangles, 2 more tetrahedra
+    for (const auto& e : d.elements)
+      if (e.type == 4) {
+        std::array<Eigen::Vector3d, 4> x;
+        for (int i = 0; i < 4; ++i) {
+          const auto& n = *std::find_if(d.nodes.begin(), d.nodes.end(),
+                                        [&](const io::MshNode& m) { return m.tag == d.nodes_of(e)[i]; });
+          x[i] = Eigen::Vector3d(n.x[0], n.x[1], n.x[2]);
+        }
+        CHECK((x[1] - x[0]).dot((x[2] - x[0]).cross(x[3] - x[0])) > 0.0);
+      }
+  }
+}
+
 TEST_CASE("a triangle whose corner joins two curves tangentially (G1) is an ear; at a kink it is not") {
   // Face 1 is the plane z = 0. Triangle V A B, V = (0, 0), A = (1, 0.5),
   // B = (-1, 0.5), has edge V-A on curve 1 and edge B-V on curve 2, which

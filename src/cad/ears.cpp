@@ -23,6 +23,7 @@ constexpr int gmsh_tetrahedron = 4;
 
 using Edge = std::pair<std::int64_t, std::int64_t>;
 using Triangle = std::array<std::int64_t, 3>;
+using Tetrahedron = std::array<std::int64_t, 4>;
 
 Edge edge_key(std::int64_t a, std::int64_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
@@ -47,6 +48,12 @@ class EarSplitter {
       index_[d.nodes[i].tag] = i;
       next_node_ = std::max(next_node_, d.nodes[i].tag + 1);
     }
+    for (const auto& e : d.elements)
+      if (e.type == gmsh_tetrahedron && e.num_nodes == 4) {
+        const auto n = d.nodes_of(e);
+        const Tetrahedron t{n[0], n[1], n[2], n[3]};
+        for (int apex = 0; apex < 4; ++apex) tetrahedra_on_[triangle_key(face_opposite(t, apex))].push_back(t);
+      }
     elements_.reserve(d.elements.size());
   }
 
@@ -89,10 +96,20 @@ class EarSplitter {
     return Eigen::Vector3d(x[0], x[1], x[2]);
   }
 
+  /// The projection of y onto face `face`: its (u, v) and its point.
+  std::pair<Eigen::Vector2d, Eigen::Vector3d> on_face(int face, const Eigen::Vector3d& y) const {
+    const Eigen::Vector2d uv = faces_.project(face, y);
+    return {uv, faces_.evaluate(face, uv)};
+  }
+
   /// A new node of face `face` at the projection of y, with its (u, v).
   std::int64_t face_node(int face, const Eigen::Vector3d& y) {
-    const Eigen::Vector2d uv = faces_.project(face, y);
-    const Eigen::Vector3d x = faces_.evaluate(face, uv);
+    const auto [uv, x] = on_face(face, y);
+    return face_node(face, uv, x);
+  }
+
+  /// A new node of face `face` at x, of parameters uv.
+  std::int64_t face_node(int face, const Eigen::Vector2d& uv, const Eigen::Vector3d& x) {
     io::MshNode node;
     node.tag = next_node_++;
     node.x = {x[0], x[1], x[2]};
@@ -118,6 +135,29 @@ class EarSplitter {
   /// node `centre`: the tetrahedron on it is split there too (finish).
   void split_face_at(const Triangle& corners, std::int64_t centre) { face_centres_[triangle_key(corners)] = centre; }
 
+  /// Whether splitting the tetrahedra on the triangle with these corners at
+  /// point c keeps every piece's orientation: c is on the inner side of each
+  /// plane through the apex and an edge of the triangle. The projection onto
+  /// a curved face moves c off the triangle's plane, and towards the apex it
+  /// can cross those planes where the face bends more than the tetrahedron
+  /// is tall.
+  bool pieces_keep_orientation(const Triangle& corners, const Eigen::Vector3d& c) const {
+    const auto on = tetrahedra_on_.find(triangle_key(corners));
+    if (on == tetrahedra_on_.end()) return true;
+    for (const Tetrahedron& t : on->second) {
+      std::array<Eigen::Vector3d, 4> x;
+      for (int i = 0; i < 4; ++i) x[i] = position(t[i]);
+      const double whole = signed_volume(x);
+      for (int i = 0; i < 4; ++i) {
+        if (std::find(corners.begin(), corners.end(), t[i]) == corners.end()) continue;
+        auto piece = x;
+        piece[i] = c;
+        if (!(signed_volume(piece) / whole > 0.0)) return false;
+      }
+    }
+    return true;
+  }
+
   /// Replaces d's elements with those added, each tetrahedron on a split
   /// boundary triangle split at that triangle's new node.
   void finish() {
@@ -135,16 +175,25 @@ class EarSplitter {
   std::vector<io::MshElement> elements_;
   std::vector<std::int64_t> element_nodes_;
   std::map<Triangle, std::int64_t> face_centres_;
+  std::map<Triangle, std::vector<Tetrahedron>> tetrahedra_on_;  // by face, before any split
+
+  static double signed_volume(const std::array<Eigen::Vector3d, 4>& x) {
+    return (x[1] - x[0]).dot((x[2] - x[0]).cross(x[3] - x[0]));
+  }
+
+  static Triangle face_opposite(const Tetrahedron& t, int apex) {
+    Triangle face{};
+    for (int i = 0, k = 0; i < 4; ++i)
+      if (i != apex) face[k++] = t[i];
+    return face;
+  }
 
   /// The new node of a split triangle among the faces of tetrahedron t, and
   /// the local index of the vertex opposite it; {-1, -1} if none.
-  std::pair<std::int64_t, int> split_face_of(const std::array<std::int64_t, 4>& t) const {
-    for (int apex = 0; apex < 4; ++apex) {
-      Triangle face{};
-      for (int i = 0, k = 0; i < 4; ++i)
-        if (i != apex) face[k++] = t[i];
-      if (const auto c = face_centres_.find(triangle_key(face)); c != face_centres_.end()) return {c->second, apex};
-    }
+  std::pair<std::int64_t, int> split_face_of(const Tetrahedron& t) const {
+    for (int apex = 0; apex < 4; ++apex)
+      if (const auto c = face_centres_.find(triangle_key(face_opposite(t, apex))); c != face_centres_.end())
+        return {c->second, apex};
     return {-1, -1};
   }
 
@@ -159,7 +208,7 @@ class EarSplitter {
     elements_.clear();
     element_nodes_.clear();
     for (const auto& e : elements) {
-      std::vector<std::array<std::int64_t, 4>> pending;
+      std::vector<Tetrahedron> pending;
       if (e.type == gmsh_tetrahedron && e.num_nodes == 4)
         pending.push_back({nodes[e.first], nodes[e.first + 1], nodes[e.first + 2], nodes[e.first + 3]});
       else
@@ -186,7 +235,8 @@ class EarSplitter {
 };
 
 /// Runs split(splitter, element, corners, ear corner) on every ear of type `type` (N
-/// corners) on a face, keeps the other elements; returns the ears split.
+/// corners) on a face, keeps the other elements; returns the ears split
+/// (split returns false where it kept the ear).
 template <std::size_t N, class Split>
 int split_ears(io::MshData& d, const FaceGeometry& faces, int type, Split&& split) {
   EarSplitter s(d, faces);
@@ -203,8 +253,7 @@ int split_ears(io::MshData& d, const FaceGeometry& faces, int type, Split&& spli
       s.add(e, n);
       continue;
     }
-    split(s, e, corners, ear);
-    ++ears;
+    ears += split(s, e, corners, ear);
   }
   s.finish();
   return ears;
@@ -215,7 +264,7 @@ int split_ears(io::MshData& d, const FaceGeometry& faces, int type, Split&& spli
 /// of its two neighbours, so halfway would put the inner quad's corner on
 /// the line of theirs); the four around the inner quad, each on one of the
 /// ear's edges, then the inner one, all with the ear's winding.
-void split_quad_ear(EarSplitter& s, const io::MshElement& e, const std::array<std::int64_t, 4>& q, int ear) {
+bool split_quad_ear(EarSplitter& s, const io::MshElement& e, const std::array<std::int64_t, 4>& q, int ear) {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   for (auto t : q) centre += 0.25 * s.position(t);
   std::array<std::int64_t, 4> inner{};
@@ -228,18 +277,26 @@ void split_quad_ear(EarSplitter& s, const io::MshElement& e, const std::array<st
     s.add(e, around, i > 0);
   }
   s.add(e, inner, true);
+  return true;
 }
 
 /// A triangle ear into three around its centre, projected onto the face
-/// (and the tetrahedron on it, if any, into three at the same node).
-void split_triangle_ear(EarSplitter& s, const io::MshElement& e, const std::array<std::int64_t, 3>& t, int) {
+/// (and the tetrahedron on it, if any, into three at the same node), unless
+/// a piece of that tetrahedron would come out inverted: the ear is kept.
+bool split_triangle_ear(EarSplitter& s, const io::MshElement& e, const std::array<std::int64_t, 3>& t, int) {
   const Eigen::Vector3d centre = (s.position(t[0]) + s.position(t[1]) + s.position(t[2])) / 3;
-  const std::int64_t c = s.face_node(e.entity.tag, centre);
+  const auto [uv, x] = s.on_face(e.entity.tag, centre);
+  if (!s.pieces_keep_orientation(t, x)) {
+    s.add(e, t);
+    return false;
+  }
+  const std::int64_t c = s.face_node(e.entity.tag, uv, x);
   s.split_face_at(t, c);
   for (int i = 0; i < 3; ++i) {
     const std::array<std::int64_t, 3> piece{t[i], t[(i + 1) % 3], c};
     s.add(e, piece, i > 0);
   }
+  return true;
 }
 
 }  // namespace

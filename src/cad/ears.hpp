@@ -58,6 +58,8 @@ int split_quad_ears(io::MshData& d, const FaceGeometry& faces);
 /// curve, curved, leave it in opposite directions, so det D phi = 0 there
 /// for the tetrahedron too, and the ear's third edge, on the boundary, is
 /// not one the flat-corner split of hom/mesh/flat_corners.hpp may split).
+/// An ear whose projected centre would invert one of those pieces (a face
+/// that bends more across the ear than a tetrahedron on it is tall) is kept.
 /// Returns the number of ears split.
 int split_triangle_ears(io::MshData& d, const FaceGeometry& faces);
 
