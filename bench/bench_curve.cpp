@@ -60,6 +60,17 @@
 /// cross-check on the CAD cases). Surface meshes have no such peer: Gmsh
 /// signs a curved surface element against its straight facet's normal.
 ///
+/// --optimizer-peer gmsh (issue 10's peer on the CAD cases): each
+/// tetrahedral case's volume stage is compared with Gmsh's high-order
+/// optimizer (Mesh.HighOrderOptimize = --peer-mode, in a child process
+/// under --peer-timeout; src/meshing/gmsh_peer.hpp) on the mesh that stage
+/// starts from: the same linear mesh, degree and boundary nodes on the CAD,
+/// held as hom holds them. That mesh is the pipeline run again without the
+/// volume stage (0 iterations, no p-continuation, no certificate); Gmsh's
+/// result is judged with the stages' quality (shape measure, straight-sided
+/// ideal), printed as a "gmsh" line and stored as the volume's optimized
+/// case's "optimizer_peer".
+///
 /// Exit status: 0 when every case gives a valid mesh, 1 when a case is
 /// invalid or fails (the error is printed and recorded), 2 on bad options.
 
@@ -72,6 +83,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <boost/program_options.hpp>
@@ -81,10 +93,14 @@
 #include "curve_mesh.hpp"
 #include "curve_models.hpp"
 #include "gmsh_model.hpp"
+#include "gmsh_peer.hpp"
+#include "gmsh_peer_report.hpp"
 #include "gmsh_validity.hpp"
 #include "harness.hpp"
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
+#include "hom/measure/shape_measure.hpp"
+#include "hom/quality/mesh_quality.hpp"
 
 #ifndef HOM_VERSION
 #define HOM_VERSION "unknown"
@@ -123,6 +139,9 @@ struct Settings {
   int iterations_after_valid = 5;
   bool certify = false;  ///< CurveOptions::certify: certify-and-repair after the last stage
   bool gmsh_peer = true;  ///< with certify: Gmsh's validity analysis of each volume or planar result beside hom's
+  std::string optimizer_peer = "none";  ///< --optimizer-peer: none | gmsh (tetrahedral cases)
+  double peer_timeout = 1800;           ///< --peer-timeout, seconds per Gmsh run
+  int peer_mode = 1;                    ///< --peer-mode: Mesh.HighOrderOptimize
 };
 
 const char* kind_name(Kind k) {
@@ -212,6 +231,8 @@ class Runner {
                       c->rounds, std::string(to_string(c->reason)).c_str(), c->time_s);
         if constexpr (S == F::dim)
           if (r.certification && s_.gmsh_peer) compare_with_gmsh(c.name, p, r.mesh);
+        if constexpr (std::is_same_v<F, hom::Simplex<3>>)
+          if (s_.optimizer_peer == "gmsh") run_optimizer_peer(cad, linear, o);
         const std::string claim = c.name + " p = " + std::to_string(p) +
                                   ": valid (0 inverted at quadrature points, det > 0 at the nodes, boundary on the CAD)";
         if (!r.conformity.ok) std::printf("   %s\n", r.conformity.problem.c_str());
@@ -251,6 +272,36 @@ class Runner {
                                                   ": Gmsh's Plugin(AnalyseMeshQuality) and hom agree on every "
                                                   "element hom decides");
     cases_.back().set("peer", hom::meshing::peer_json(peer));
+  }
+
+  /// Gmsh's optimizer on the mesh hom's volume stage starts from (see the
+  /// file comment); its entry goes to the last case, the volume's optimized
+  /// stage.
+  void run_optimizer_peer(const hom::cad::CadModel& cad, const hom::cad::CurvedMesh<hom::Simplex<3>, 3>& linear,
+                          hom::cad::CurveOptions o) {
+    o.max_iterations = 0;
+    o.pcont = hom::cad::CurveOptions::Continuation::off;
+    o.certify = false;
+    const auto start = hom::cad::curve_mesh<hom::Simplex<3>, 3>(cad, linear, o);
+    hom::meshing::GmshPeerOptions po;
+    po.mode = s_.peer_mode;
+    po.time_limit_s = s_.peer_timeout;
+    po.threads = s_.threads;
+    std::printf("   gmsh peer (Mesh.HighOrderOptimize = %d, limit %.0f s) from the initial curved mesh (%d inverted) ...\n",
+                po.mode, po.time_limit_s, start.inverted);
+    std::fflush(stdout);
+    const auto run = hom::meshing::gmsh_high_order_optimize(start.mesh, po);
+    hom::Statistics quality, scaled_jacobian;
+    if (run.finished) {
+      const auto q = hom::mesh_quality(run.mesh, hom::ShapeMeasure{}, hom::IdealKind::straight_sided);
+      quality = q.quality_statistics();
+      scaled_jacobian = q.scaled_jacobian_statistics();
+      std::printf("   %-8s %-10s %8d %8d %6.3f %6.3f %6.3f %5d %7.3f %8.2f\n", "volume", "gmsh", run.mesh.num_elements(),
+                  run.mesh.num_nodes(), quality.min, quality.max, quality.mean, quality.inverted, scaled_jacobian.min,
+                  run.time_s);
+    }
+    hom::bench::print_gmsh_peer_status(run, s_.peer_timeout, scaled_jacobian.min, "   ");
+    cases_.back().set("optimizer_peer", hom::bench::gmsh_peer_json(run, s_.peer_timeout, quality, scaled_jacobian));
   }
 
   void report(const Case& c, const hom::cad::CadModel& cad, const std::string& family, int p,
@@ -474,7 +525,13 @@ int main(int argc, char** argv) {
       ("certify", po::bool_switch(&s.certify),
        "certify det > 0 everywhere in each element (Bernstein bounds) and repair folds between the quadrature "
        "points, as hom curve --certify; volume and planar results are also analysed by Gmsh (see --no-peer)")  //
-      ("no-peer", po::bool_switch(&no_peer), "with --certify: skip Gmsh's validity analysis of the results");
+      ("no-peer", po::bool_switch(&no_peer), "with --certify: skip Gmsh's validity analysis of the results")  //
+      ("optimizer-peer", po::value(&s.optimizer_peer)->default_value("none"),
+       "none | gmsh: Gmsh's high-order optimizer on the mesh each tetrahedral case's volume stage starts from, "
+       "judged by the same quality measure (stored as the optimized case's \"optimizer_peer\")")  //
+      ("peer-timeout", po::value(&s.peer_timeout)->default_value(1800), "wall-clock limit of each Gmsh run, seconds")  //
+      ("peer-mode", po::value(&s.peer_mode)->default_value(1),
+       "Mesh.HighOrderOptimize: 1 optimization, 2 elastic + optimization, 3 elastic, 4 fast curving");
   std::vector<int> forced;
   try {
     po::variables_map vm;
@@ -486,6 +543,10 @@ int main(int argc, char** argv) {
     }
     s.out = vm["out"].as<std::string>();
     s.gmsh_peer = !no_peer;
+    if (s.optimizer_peer != "none" && s.optimizer_peer != "gmsh")
+      throw std::invalid_argument("--optimizer-peer: expected none or gmsh, got '" + s.optimizer_peer + "'");
+    if (!(s.peer_timeout > 0)) throw std::invalid_argument("--peer-timeout must be positive");
+    if (s.peer_mode < 1 || s.peer_mode > 4) throw std::invalid_argument("--peer-mode: expected 1, 2, 3 or 4");
     if (!degrees.empty()) forced = parse_degrees(degrees);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_curve: %s\n", e.what());

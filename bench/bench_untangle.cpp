@@ -62,6 +62,7 @@
 
 #include "cube_with_cavity.hpp"
 #include "gmsh_peer.hpp"
+#include "gmsh_peer_report.hpp"
 #include "harness.hpp"
 #include "mesh_cut.hpp"
 #include "plot_script.hpp"
@@ -268,43 +269,15 @@ PeerRow run_peer(const TetMesh& perturbed, int p, const Options& o) {
   return row;
 }
 
-std::string peer_label(const PeerRow& r) {
-  return "gmsh " + (r.run.version.empty() ? std::string("?") : r.run.version) +
-         " (Mesh.HighOrderOptimize = " + std::to_string(r.run.mode) + ")";
-}
+std::string peer_label(const PeerRow& r) { return hom::bench::gmsh_peer_label(r.run); }
 
 void print_peer(const PeerRow& r) {
-  if (r.run.finished) {
-    print_row("gmsh", r.stage.quality, nullptr);
-    std::printf("  %s: %.2f s, min scaled Jacobian %.3f%s%s\n", peer_label(r).c_str(), r.run.time_s,
-                r.stage.scaled_jacobian.min, r.run.note.empty() ? "" : "; gmsh: ", r.run.note.c_str());
-  } else if (r.run.status == "timeout") {
-    std::printf("  %-10s timeout after %.0f s (%.0f s of processor time; %s)\n", "gmsh", r.time_limit_s, r.run.cpu_s,
-                peer_label(r).c_str());
-  } else {
-    std::printf("  %-10s %s after %.2f s (%s)%s%s\n", "gmsh", r.run.status.c_str(), r.run.time_s, peer_label(r).c_str(),
-                r.run.note.empty() ? "" : "; ", r.run.note.c_str());
-  }
+  if (r.run.finished) print_row("gmsh", r.stage.quality, nullptr);
+  hom::bench::print_gmsh_peer_status(r.run, r.time_limit_s, r.stage.scaled_jacobian.min);
 }
 
 Json peer_json(const PeerRow& r) {
-  Json j = Json::object();
-  j.set("tool", r.run.tool)
-      .set("version", r.run.version)
-      .set("mode", r.run.mode)
-      .set("status", r.run.status)
-      .set("time_s", r.run.time_s)
-      .set("time_limit_s", r.time_limit_s)
-      .set("inverted", r.run.finished ? Json(r.stage.quality.inverted) : Json())
-      .set("min_q", r.run.finished ? Json(r.stage.quality.min) : Json())
-      .set("max_q", r.run.finished ? Json(r.stage.quality.max) : Json())
-      .set("mean_q", r.run.finished ? Json(r.stage.quality.mean) : Json())
-      .set("std_q", r.run.finished ? Json(r.stage.quality.std_dev) : Json())
-      .set("min_scaled_jacobian", r.run.finished ? Json(r.stage.scaled_jacobian.min) : Json())
-      .set("cpu_s", r.run.cpu_s)
-      .set("peak_rss_mb", r.run.peak_rss_mb)
-      .set("note", r.run.note.empty() ? Json() : Json(r.run.note));
-  return j;
+  return hom::bench::gmsh_peer_json(r.run, r.time_limit_s, r.stage.quality, r.stage.scaled_jacobian);
 }
 
 /// The peer's CSV row (stage "gmsh"; the solver column names the tool and
