@@ -137,11 +137,11 @@ FULL = [
                                                        "t106_cascade", "--certify"],
          timeout=4 * 3600),
     dict(name="curve_peer", binary="bench_curve",
-         args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3", "--optimizer-peer", "gmsh",
-               "--peer-timeout", "1800"], timeout=4 * 3600, role="peer",
+         args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3", "--certify", "--optimizer-peer",
+               "gmsh", "--peer-timeout", "1800"], timeout=4 * 3600, role="peer",
          conditions="two real CAD models (../shared/data/cad) at p = 2, 3: hom's volume stage (stopping 5 iterations "
-                    "after the mesh is valid, bench_curve's default) and Gmsh's optimizer from the same initial "
-                    "curved mesh"),
+                    "after the mesh is valid, bench_curve's default, then certified and repaired) and Gmsh's "
+                    "optimizer from the same initial curved mesh"),
     dict(name="boundary_layer_wing", binary="bench_boundary_layer", args=["--case", "wing", "--p", "2"],
          timeout=4 * 3600,
          conditions="the wing section of the full boundary_layer run at the thesis's p = 2 of table 4.3"),
@@ -798,22 +798,39 @@ FIGURES = [
 ]
 
 
+def kept_beside_report(work, out, run):
+    """Whether run's figures are to be taken from OUT/figures/RUN: its work directory is gone (a report
+    gathered again on a fresh checkout, whose earlier runs left only what is beside the report)."""
+    return not os.path.isdir(os.path.join(work, run)) and os.path.isdir(os.path.join(out, "figures", run))
+
+
 def copy_figures(work, out, runs):
-    """Copies every PNG a harness wrote into OUT/figures/NAME/; returns [(caption, relative path)]."""
+    """Copies every PNG a harness wrote into OUT/figures/NAME/; returns [(caption, relative path)]. A run
+    without a work directory keeps the figures already beside the report (kept_beside_report)."""
+    def source(run, png):
+        if kept_beside_report(work, out, run):
+            return os.path.join(out, "figures", run, png)
+        return os.path.join(work, run, png)
+
+    pngs = glob.glob(os.path.join(work, "*", "*.png")) + [
+        path for path in glob.glob(os.path.join(out, "figures", "*", "*.png"))
+        if kept_beside_report(work, out, os.path.basename(os.path.dirname(path)))]
     listed, seen = [], set()
     for run, png, caption in FIGURES:
-        src = os.path.join(work, run, png)
-        if os.path.exists(src):
+        if os.path.exists(source(run, png)):
             listed.append((caption, os.path.join("figures", run, png)))
-            seen.add(src)
-    for src in sorted(glob.glob(os.path.join(work, "*", "*.png"))):
-        run = os.path.basename(os.path.dirname(src))
-        if src not in seen and run in runs:
-            listed.append((os.path.basename(src), os.path.join("figures", run, os.path.basename(src))))
+            seen.add((run, png))
+    for path in sorted(pngs, key=os.path.basename):
+        run, png = os.path.basename(os.path.dirname(path)), os.path.basename(path)
+        if (run, png) not in seen and run in runs:
+            seen.add((run, png))
+            listed.append((png, os.path.join("figures", run, png)))
     for caption, rel in listed:
-        dst = os.path.join(out, rel)
+        run, png = rel.split(os.sep)[1:]
+        src, dst = source(run, png), os.path.join(out, rel)
         os.makedirs(os.path.dirname(dst), exist_ok=True)
-        shutil.copyfile(os.path.join(work, rel.split(os.sep, 1)[1]), dst)
+        if os.path.abspath(src) != os.path.abspath(dst):
+            shutil.copyfile(src, dst)
     return listed
 
 
@@ -905,8 +922,14 @@ def histograms(work, out, runs):
         ax.set_title("%s: %s" % (run, prefix))
         ax.legend(fontsize=8, loc="upper left")
         rel = save_figure(fig, out, os.path.join("figures", "histograms", "%s_%s.png" % (run, prefix)))
-        made.append(("Element quality histogram, %s %s" % (run, prefix), rel))
-    return made
+        made.append(((run, prefix), rel))
+    # A run without a work directory (its VTU files gone with it) keeps the histograms beside the report.
+    for path in glob.glob(os.path.join(out, "figures", "histograms", "*.png")):
+        name = os.path.basename(path)[:-len(".png")]
+        run = max((r for r in runs if name.startswith(r + "_")), key=len, default=None)
+        if run and not os.path.isdir(os.path.join(work, run)) and (run, name[len(run) + 1:]) not in dict(made):
+            made.append(((run, name[len(run) + 1:]), os.path.join("figures", "histograms", os.path.basename(path))))
+    return [("Element quality histogram, %s %s" % key, rel) for key, rel in sorted(made)]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -946,7 +969,8 @@ def cad_peer_rows(reports):
                 "bench_curve --optimizer-peer gmsh, did not run or found no CAD files).", ""]
     out = ["Chapter 6's volume stage on real CAD: the curved mesh that hom's volume stage starts from (the same "
            "linear mesh, degree and boundary nodes on the CAD, held) through hom and through Gmsh's optimizer, "
-           "both judged by hom's shape quality. hom's time is its volume stage's. Gmsh's optimizer works only on "
+           "both judged by hom's shape quality. hom's time is its volume stage's (with --certify, the certification "
+           "and repair included). Gmsh's optimizer works only on "
            "patches around the elements whose scaled Jacobian lies outside [Mesh.HighOrderThresholdMin, Max] = "
            "[0.1, 2]: where the initial mesh has none it returns at once, with the initial quality.", "",
            md_table(["case", "tetrahedra", "Gmsh", "Gmsh status", "#inv before", "#inv hom", "#inv Gmsh",
@@ -1268,8 +1292,9 @@ def write_report(args, meta, runs, reports, out_dir, work, total_s):
     text = "\n".join(lines).rstrip() + "\n"
     os.makedirs(os.path.join(out_dir, "data"), exist_ok=True)
     for r in runs.values():
-        if r.get("report"):
-            shutil.copyfile(r["report"], os.path.join(out_dir, "data", r["name"] + ".json"))
+        dst = os.path.join(out_dir, "data", r["name"] + ".json")
+        if r.get("report") and os.path.abspath(r["report"]) != os.path.abspath(dst):
+            shutil.copyfile(r["report"], dst)
     tmp = os.path.join(out_dir, "report.md.tmp")
     with open(tmp, "w") as f:
         f.write(text)
@@ -1318,7 +1343,14 @@ def main():
     t0 = time.time()
     runs, reports = {}, {}
     state = os.path.join(work, "runs.json")
-    previous = json.load(open(state)) if os.path.exists(state) else {}
+    # The earlier runs: the work directory's record or, in a new work directory (a fresh checkout), the
+    # copy kept beside the report, whose JSON reports are in OUT/data.
+    kept_state = os.path.join(out_dir, "data", "runs.json")
+    previous = {}
+    for path in (state, kept_state):
+        if os.path.exists(path):
+            previous = json.load(open(path))
+            break
     previous_meta = previous.get("meta") if "runs" in previous else None
     previous = previous.get("runs", previous)
     for spec in specs:
@@ -1329,6 +1361,12 @@ def main():
             rec = previous.get(name)
             if not rec:  # listed, so that a partial report shows what it lacks
                 rec = unrun_record(spec, "not run yet")
+            elif rec.get("report") and not os.path.exists(rec["report"]):
+                # Gone with its work directory, or relative to OUT (the kept copy): the JSON beside the report.
+                kept = os.path.join(out_dir, rec["report"])
+                if not os.path.exists(kept):
+                    kept = os.path.join(out_dir, "data", name + ".json")
+                rec["report"] = kept if os.path.exists(kept) else None
         else:
             rec = run_harness(spec, args.build, work, log)
         runs[name] = rec
@@ -1347,6 +1385,11 @@ def main():
         json.dump(dict(meta=meta, runs=runs), f, indent=1)
     total = sum(r.get("wall_s") or 0 for r in runs.values()) if args.no_run else time.time() - t0
     write_report(args, meta, runs, reports, out_dir, work, total)
+    # The runs' record travels with the report (a fresh checkout has no work directory), its JSON
+    # reports named relative to OUT.
+    kept = {n: dict(r, report=os.path.join("data", n + ".json") if r.get("report") else None) for n, r in runs.items()}
+    with open(kept_state, "w") as f:
+        json.dump(dict(meta=meta, runs=kept), f, indent=1)
     log("wrote %s (%.0f s)" % (os.path.join(out_dir, "report.md"), time.time() - t0))
     # A harness that is built but wrote no report crashed or timed out: the report says so, and
     # the exit status too (claim checks that fail are the report's business, not an error).
