@@ -942,6 +942,37 @@ def ratio(a, b):
     return "-"
 
 
+PEER_COLUMNS = ["#inv before", "#inv hom", "#inv Gmsh", "min q hom", "min q Gmsh", "mean q hom", "mean q Gmsh",
+                "min SJ hom", "min SJ Gmsh", "time hom s", "time Gmsh s", "time ratio Gmsh/hom"]
+
+
+def peer_cells(case, initial, peer):
+    """The PEER_COLUMNS cells of one peer row: hom's optimized case, its initial case and Gmsh's entry."""
+    r = ratio(peer.get("time_s"), case.get("time_s"))
+    return [num(initial.get("inverted")), num(case.get("inverted")), num(peer.get("inverted")),
+            num(case.get("min_q"), 3), num(peer.get("min_q"), 3), num(case.get("mean_q"), 3),
+            num(peer.get("mean_q"), 3), num(case.get("min_scaled_jacobian"), 3),
+            num(peer.get("min_scaled_jacobian"), 3), num(case.get("time_s"), 1), num(peer.get("time_s"), 1),
+            r if peer.get("status") == "ok" else "> %s (%s)" % (r, peer.get("status"))]
+
+
+def peer_verdicts(rows, first):
+    """What a peer table's rows say plainly (their PEER_COLUMNS cells start at column `first`)."""
+    tests = [("**hom's minimum quality is below Gmsh's** for: %s.",
+              lambda c: c[3] != "-" and c[4] != "-" and float(c[3]) < float(c[4])),
+             ("Gmsh leaves inverted elements where hom leaves none: %s.", lambda c: c[2] not in ("0", "-") and c[1] == "0"),
+             ("**hom leaves inverted elements** for: %s.", lambda c: c[1] not in ("0", "-")),
+             ("**hom's result folds at a node** (min scaled Jacobian <= 0, no quadrature point inverted) for: %s.",
+              lambda c: c[1] == "0" and c[7] != "-" and float(c[7]) <= 0),
+             ("**hom is slower than Gmsh** for: %s.", lambda c: re.match(r"^[0-9.]+$", c[11]) and float(c[11]) < 1)]
+    out = []
+    for text, test in tests:
+        names = [r[0] for r in rows if test(r[first:first + len(PEER_COLUMNS)])]
+        if names:
+            out += [text % ", ".join(names), ""]
+    return out
+
+
 def cad_peer_rows(reports):
     """Chapter 6's volume stage against Gmsh's optimizer on real CAD (bench_curve --optimizer-peer gmsh)."""
     rows = []
@@ -955,40 +986,19 @@ def cad_peer_rows(reports):
         if c.get("stage") != "optimized" or not peer:
             continue
         i = initial.get((c.get("name"), c.get("p")), {})
-        ok = peer.get("status") == "ok"
         rows.append(["%s p = %s" % (c.get("name"), c.get("p")), num(c.get("elements")), "mode %s" % peer.get("mode"),
-                     peer.get("status"), num(i.get("inverted")), num(c.get("inverted")), num(peer.get("inverted")),
-                     num(c.get("min_q"), 3), num(peer.get("min_q"), 3), num(c.get("mean_q"), 3),
-                     num(peer.get("mean_q"), 3), num(c.get("min_scaled_jacobian"), 3),
-                     num(peer.get("min_scaled_jacobian"), 3), num(c.get("time_s"), 1), num(peer.get("time_s"), 1),
-                     ratio(peer.get("time_s"), c.get("time_s")) if ok else
-                     "> " + ratio(peer.get("time_s"), c.get("time_s")) + " (" + str(peer.get("status")) + ")",
-                     num(peer.get("peak_rss_mb"), 0)])
+                     peer.get("status")] + peer_cells(c, i, peer) + [num(peer.get("peak_rss_mb"), 0)])
     if not rows:
         return ["Gmsh on the CAD cases of chapter 6: not in this report (the full mode's run curve_peer, "
                 "bench_curve --optimizer-peer gmsh, did not run or found no CAD files).", ""]
-    out = ["Chapter 6's volume stage on real CAD: the curved mesh that hom's volume stage starts from (the same "
-           "linear mesh, degree and boundary nodes on the CAD, held) through hom and through Gmsh's optimizer, "
-           "both judged by hom's shape quality. hom's time is its volume stage's (with --certify, the certification "
-           "and repair included). Gmsh's optimizer works only on "
-           "patches around the elements whose scaled Jacobian lies outside [Mesh.HighOrderThresholdMin, Max] = "
-           "[0.1, 2]: where the initial mesh has none it returns at once, with the initial quality.", "",
-           md_table(["case", "tetrahedra", "Gmsh", "Gmsh status", "#inv before", "#inv hom", "#inv Gmsh",
-                     "min q hom", "min q Gmsh", "mean q hom", "mean q Gmsh", "min SJ hom", "min SJ Gmsh",
-                     "time hom s", "time Gmsh s", "time ratio Gmsh/hom", "peak MB Gmsh"], rows), ""]
-    worse = [r[0] for r in rows if r[7] != "-" and r[8] != "-" and float(r[7]) < float(r[8])]
-    if worse:
-        out += ["**hom's minimum quality is below Gmsh's** for: %s." % ", ".join(worse), ""]
-    hom_inv = [r[0] for r in rows if r[5] not in ("0", "-")]
-    if hom_inv:
-        out += ["**hom leaves inverted elements** for: %s." % ", ".join(hom_inv), ""]
-    gmsh_inv = [r[0] for r in rows if r[6] not in ("0", "-")]
-    if gmsh_inv:
-        out += ["Gmsh leaves inverted elements for: %s." % ", ".join(gmsh_inv), ""]
-    slower = [r[0] for r in rows if re.match(r"^[0-9.]+$", r[15]) and float(r[15]) < 1]
-    if slower:
-        out += ["**hom is slower than Gmsh** for: %s." % ", ".join(slower), ""]
-    return out
+    return ["Chapter 6's volume stage on real CAD: the curved mesh that hom's volume stage starts from (the same "
+            "linear mesh, degree and boundary nodes on the CAD, held) through hom and through Gmsh's optimizer, "
+            "both judged by hom's shape quality. hom's time is its volume stage's (with --certify, the certification "
+            "and repair included). Gmsh's optimizer works only on patches around the elements whose scaled Jacobian "
+            "lies outside [Mesh.HighOrderThresholdMin, Max] = [0.1, 2]: where the initial mesh has none it returns "
+            "at once, with the initial quality.", "",
+            md_table(["case", "tetrahedra", "Gmsh", "Gmsh status"] + PEER_COLUMNS + ["peak MB Gmsh"], rows),
+            ""] + peer_verdicts(rows, 4)
 
 
 def peer_section(reports, runs):
@@ -1002,35 +1012,16 @@ def peer_section(reports, runs):
             peer = c.get("peer")
             if c.get("stage") != "optimized" or not peer:
                 continue
-            i = init.get(c.get("p"), {})
             rows.append(["%s p = %s" % ("unperturbed" if "unperturbed" in run else "perturbed", c.get("p")),
-                         "mode %s" % peer.get("mode"), peer.get("status"), num(i.get("inverted")),
-                         num(c.get("inverted")), num(peer.get("inverted")), num(c.get("min_q"), 3),
-                         num(peer.get("min_q"), 3), num(c.get("mean_q"), 3), num(peer.get("mean_q"), 3),
-                         num(c.get("min_scaled_jacobian"), 3), num(peer.get("min_scaled_jacobian"), 3),
-                         num(c.get("time_s"), 1), num(peer.get("time_s"), 1),
-                         ratio(peer.get("time_s"), c.get("time_s")) if peer.get("status") == "ok" else
-                         "> " + ratio(peer.get("time_s"), c.get("time_s")) + " (" + str(peer.get("status")) + ")",
-                         num(c.get("peak_rss_mb"), 0), num(peer.get("peak_rss_mb"), 0)])
+                         "mode %s" % peer.get("mode"), peer.get("status")] +
+                        peer_cells(c, init.get(c.get("p"), {}), peer) +
+                        [num(c.get("peak_rss_mb"), 0), num(peer.get("peak_rss_mb"), 0)])
     if rows:
         out += ["Untangling (table 4.1's pipeline): the same perturbed mesh through hom and through Gmsh's high-order "
                 "optimizer (Mesh.HighOrderOptimize, child process), both judged by hom's shape quality. hom's peak memory "
                 "is the whole harness process's.", "",
-                md_table(["case", "Gmsh", "Gmsh status", "#inv before", "#inv hom", "#inv Gmsh", "min q hom",
-                          "min q Gmsh", "mean q hom", "mean q Gmsh", "min SJ hom", "min SJ Gmsh", "time hom s",
-                          "time Gmsh s", "time ratio Gmsh/hom", "peak MB hom", "peak MB Gmsh"], rows), ""]
-        worse = [r[0] for r in rows if r[6] != "-" and r[7] != "-" and float(r[6]) < float(r[7])]
-        if worse:
-            out += ["**hom's minimum quality is below Gmsh's** for: %s." % ", ".join(worse), ""]
-        gmsh_inv = [r[0] for r in rows if r[5] not in ("0", "-") and r[4] == "0"]
-        if gmsh_inv:
-            out += ["Gmsh leaves inverted elements where hom leaves none: %s." % ", ".join(gmsh_inv), ""]
-        hom_inv = [r[0] for r in rows if r[4] not in ("0", "-")]
-        if hom_inv:
-            out += ["**hom leaves inverted elements** for: %s." % ", ".join(hom_inv), ""]
-        slower = [r[0] for r in rows if re.match(r"^[0-9.]+$", r[14]) and float(r[14]) < 1]
-        if slower:
-            out += ["**hom is slower than Gmsh** for: %s." % ", ".join(slower), ""]
+                md_table(["case", "Gmsh", "Gmsh status"] + PEER_COLUMNS + ["peak MB hom", "peak MB Gmsh"], rows),
+                ""] + peer_verdicts(rows, 3)
     else:
         out += ["No untangling peer run in this report (bench_untangle --peer gmsh not run or Gmsh not built).", ""]
     out += cad_peer_rows(reports)
