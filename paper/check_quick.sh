@@ -19,3 +19,17 @@ start=$(date +%s)
   --skip surface_appendixF,curve_cube,untangle_newton,untangle_pcont || { echo "FAIL: paper/make exit $?"; exit 1; }
 echo "paper/make --quick took $(( $(date +%s) - start )) s"
 "$py" "$here/check_report.py" "$work/out/report.md" || exit 1
+# A new work directory (a fresh checkout) gathers the same report again from what the first one
+# kept beside it (data/runs.json, data/*.json, figures/): only the lines that name how and where
+# it was made may differ.
+same_report() { grep -v -e '^- report rebuilt' -e '^- total wall time' -e 'stay in the work directory' "$1"; }
+cp "$work/out/report.md" "$work/first.md"
+"$here/make" --quick --build "$build" --out "$work/out" --work "$work/fresh" --no-run >/dev/null ||
+  { echo "FAIL: paper/make --no-run in a new work directory"; exit 1; }
+if ! diff <(same_report "$work/first.md") <(same_report "$work/out/report.md") >"$work/kept.diff"; then
+  echo "FAIL: the report gathered again from data/runs.json differs:"
+  head -20 "$work/kept.diff"
+  exit 1
+fi
+"$py" "$here/check_report.py" "$work/out/report.md" || exit 1
+echo "the report gathers again from a new work directory"

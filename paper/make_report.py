@@ -137,9 +137,10 @@ FULL = [
                                                        "t106_cascade", "--certify"],
          timeout=4 * 3600),
     dict(name="curve_peer", binary="bench_curve",
-         args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3", "--certify", "--optimizer-peer",
-               "gmsh", "--peer-timeout", "1800"], timeout=4 * 3600, role="peer",
-         conditions="two real CAD models (../shared/data/cad) at p = 2, 3: hom's volume stage (stopping 5 iterations "
+         args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3", "--certify", "--threads", "1",
+               "--optimizer-peer", "gmsh", "--peer-timeout", "1800"], timeout=4 * 3600, role="peer",
+         conditions="two real CAD models (../shared/data/cad) at p = 2, 3, hom and Gmsh on 1 thread each: hom's "
+                    "volume stage (stopping 5 iterations "
                     "after the mesh is valid, bench_curve's default, then certified and repaired) and Gmsh's "
                     "optimizer from the same initial curved mesh"),
     dict(name="boundary_layer_wing", binary="bench_boundary_layer", args=["--case", "wing", "--p", "2"],
@@ -820,7 +821,7 @@ def copy_figures(work, out, runs):
         if os.path.exists(source(run, png)):
             listed.append((caption, os.path.join("figures", run, png)))
             seen.add((run, png))
-    for path in sorted(pngs, key=os.path.basename):
+    for path in sorted(pngs, key=lambda path: (os.path.basename(os.path.dirname(path)), os.path.basename(path))):
         run, png = os.path.basename(os.path.dirname(path)), os.path.basename(path)
         if (run, png) not in seen and run in runs:
             seen.add((run, png))
