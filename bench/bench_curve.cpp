@@ -287,7 +287,8 @@ class Runner {
     po.mode = s_.peer_mode;
     po.time_limit_s = s_.peer_timeout;
     po.threads = s_.threads;
-    std::printf("   gmsh peer (Mesh.HighOrderOptimize = %d, limit %.0f s) from the initial curved mesh (%d inverted) ...\n",
+    std::printf("   gmsh peer (Mesh.HighOrderOptimize = %d, limit %.0f s) from the initial curved mesh "
+                "(%d inverted) ...\n",
                 po.mode, po.time_limit_s, start.inverted);
     std::fflush(stdout);
     const auto run = hom::meshing::gmsh_high_order_optimize(start.mesh, po);
@@ -296,9 +297,9 @@ class Runner {
       const auto q = hom::mesh_quality(run.mesh, hom::ShapeMeasure{}, hom::IdealKind::straight_sided);
       quality = q.quality_statistics();
       scaled_jacobian = q.scaled_jacobian_statistics();
-      std::printf("   %-8s %-10s %8d %8d %6.3f %6.3f %6.3f %5d %7.3f %8.2f\n", "volume", "gmsh", run.mesh.num_elements(),
-                  run.mesh.num_nodes(), quality.min, quality.max, quality.mean, quality.inverted, scaled_jacobian.min,
-                  run.time_s);
+      std::printf("   %-8s %-10s %8d %8d %6.3f %6.3f %6.3f %5d %7.3f %8.2f\n", "volume", "gmsh",
+                  run.mesh.num_elements(), run.mesh.num_nodes(), quality.min, quality.max, quality.mean,
+                  quality.inverted, scaled_jacobian.min, run.time_s);
     }
     hom::bench::print_gmsh_peer_status(run, s_.peer_timeout, scaled_jacobian.min, "   ");
     cases_.back().set("optimizer_peer", hom::bench::gmsh_peer_json(run, s_.peer_timeout, quality, scaled_jacobian));
@@ -529,7 +530,8 @@ int main(int argc, char** argv) {
       ("optimizer-peer", po::value(&s.optimizer_peer)->default_value("none"),
        "none | gmsh: Gmsh's high-order optimizer on the mesh each tetrahedral case's volume stage starts from, "
        "judged by the same quality measure (stored as the optimized case's \"optimizer_peer\")")  //
-      ("peer-timeout", po::value(&s.peer_timeout)->default_value(1800), "wall-clock limit of each Gmsh run, seconds")  //
+      ("peer-timeout", po::value(&s.peer_timeout)->default_value(1800),
+       "wall-clock limit of each Gmsh run, seconds")  //
       ("peer-mode", po::value(&s.peer_mode)->default_value(1),
        "Mesh.HighOrderOptimize: 1 optimization, 2 elastic + optimization, 3 elastic, 4 fast curving");
   std::vector<int> forced;

@@ -962,7 +962,8 @@ def peer_verdicts(rows, first, mode):
     named by its case and its Gmsh mode, column `mode`)."""
     tests = [("**hom's minimum quality is below Gmsh's** for: %s.",
               lambda c: c[3] != "-" and c[4] != "-" and float(c[3]) < float(c[4])),
-             ("Gmsh leaves inverted elements where hom leaves none: %s.", lambda c: c[2] not in ("0", "-") and c[1] == "0"),
+             ("Gmsh leaves inverted elements where hom leaves none: %s.",
+              lambda c: c[2] not in ("0", "-") and c[1] == "0"),
              ("**hom leaves inverted elements** for: %s.", lambda c: c[1] not in ("0", "-")),
              ("**hom's result folds at a node** (min scaled Jacobian <= 0, no quadrature point inverted) for: %s.",
               lambda c: c[1] == "0" and c[7] != "-" and float(c[7]) <= 0),
