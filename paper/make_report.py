@@ -1022,8 +1022,11 @@ def peer_section(reports, runs):
                         [num(c.get("peak_rss_mb"), 0), num(peer.get("peak_rss_mb"), 0)])
     if rows:
         out += ["Untangling (table 4.1's pipeline): the same perturbed mesh through hom and through Gmsh's high-order "
-                "optimizer (Mesh.HighOrderOptimize, child process), both judged by hom's shape quality. hom's peak memory "
-                "is the whole harness process's.", "",
+                "optimizer (Mesh.HighOrderOptimize, child process), both judged by hom's shape quality. hom's peak "
+                "memory is the whole harness process's. Gmsh's modes: 1 optimization, 2 elastic analogy then optimization, "
+                "3 elastic analogy, 4 fast curving. Its optimization works on patches around the elements whose scaled "
+                "Jacobian lies outside [Mesh.HighOrderThresholdMin, Max] = [0.1, 2]: where none is (mode 1 on the "
+                "unperturbed mesh at p = 2, mode 2 after its elastic step at p = 2) it returns at once.", "",
                 md_table(["case", "Gmsh", "Gmsh status"] + PEER_COLUMNS + ["peak MB hom", "peak MB Gmsh"], rows),
                 ""] + peer_verdicts(rows, 3, 1)
     else:
@@ -1237,8 +1240,8 @@ def write_report(args, meta, runs, reports, out_dir, work, total_s):
              "- mode: %s%s" % (args.mode, " (small cases; see the conditions under each table)" if not full else
                                " (the thesis's sizes)"),
              "- build: `%s`" % os.path.relpath(args.build, REPO),
-             "- total wall time: %.0f s, CPU time of the harnesses %.0f s (every timing in this report was taken on "
-             "this machine as it was: where the CPU time is well below wall time x cores the machine was shared "
+             "- total wall time of the runs: %.0f s, CPU time of the harnesses %.0f s (every timing in this report "
+             "was taken on this machine as it was: where the CPU time is well below wall time x cores the machine was shared "
              "with other work, and wall times are pessimistic)" % (total_s, sum(r.get("cpu_s") or 0 for r in runs.values())),
              ""]
     lines += ["## Runs", "",
@@ -1378,7 +1381,8 @@ def main():
         meta = previous_meta
     with open(state, "w") as f:
         json.dump(dict(meta=meta, runs=runs), f, indent=1)
-    total = sum(r.get("wall_s") or 0 for r in runs.values()) if args.no_run else time.time() - t0
+    # The runs' own times: with --only or --no-run most runs are earlier ones.
+    total = sum(r.get("wall_s") or 0 for r in runs.values())
     write_report(args, meta, runs, reports, out_dir, work, total)
     # The runs' record travels with the report (a fresh checkout has no work directory), its JSON
     # reports named relative to OUT.
