@@ -13,7 +13,8 @@
 # folded at a node that only held nodes determine writes no mesh but its VTU,
 # the failing cells marked. --refine-invalid: bad uses refused; with
 # ../shared, an uncertified wing_fuselage mesh made valid by meshing finer.
-# --size-ball and --vertex-size grade the mesh where they say.
+# --size-ball and --vertex-size grade the mesh where they say. A user's
+# linear mesh gets its ears split.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -310,4 +311,18 @@ done
 # A negative coordinate is a value, not an option.
 "$hom" curve "$work/bib.brep" --solids 1 --p 2 --size 0.1 -o "$work/sizeneg.msh" --threads 1 \
   --size-ball -0.4,0.4,0.4,0.05,0.05 >/dev/null 2>&1 || fail "--size-ball -0.4,...: refused"
+
+# 11. A user's linear mesh with ears (test/thin_prism_model.py: Gmsh's mesh
+# of a prism on a thin ellipse, whose cap triangles at the ellipse's sharp
+# ends have two edges on it). The file has no lines on the CAD curves; hom
+# curve --mesh finds the ears from the classification, splits them (flat
+# there once curved), and the result is valid and certified.
+"$py" "$(dirname "$0")/thin_prism_model.py" "$work/thin.brep" "$work/thin.msh" ||
+  fail "could not write the thin prism (python3-gmsh)"
+log=$("$hom" curve "$work/thin.brep" --mesh "$work/thin.msh" --p 3 -o "$work/thin_p3.msh" --certify --threads 1 2>&1)
+rc=$?
+echo "$log" | grep -e "ears split" -e "^valid" | sed 's/^/  [ears] /'
+grep -q "linear mesh: [1-9][0-9]* ears split" <<<"$log" || fail "--mesh with ears: no ear split: $log"
+[[ $rc -eq 0 && -s "$work/thin_p3.msh" ]] || fail "--mesh with ears: exit $rc or no mesh"
+"$hom" quality "$work/thin_p3.msh" >/dev/null || fail "--mesh with ears: hom quality finds the result invalid"
 echo "OK"

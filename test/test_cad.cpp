@@ -22,8 +22,11 @@
 #include <string>
 #include <vector>
 
+#include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
@@ -36,11 +39,15 @@
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Wire.hxx>
+#include <gp_Ax2.hxx>
+#include <gp_Elips.hxx>
 #include <gp_Pnt.hxx>
+#include <gp_Vec.hxx>
 
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
 #include "ears.hpp"
+#include "mesh_ears.hpp"
 #include "hom/geometry/cylinder.hpp"
 #include "hom/geometry/plane.hpp"
 #include "hom/geometry/sphere.hpp"
@@ -1053,6 +1060,89 @@ TEST_CASE("edge_uv_on_face: the face's point nearest the edge's 3D point, when t
   const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(bottom, face, pa, pb);
   const gp_Pnt2d q = pc->Value(a + 1.0);
   CHECK(plane->Value(q.X(), q.Y()).Distance(c3->Value(a + 1.0)) == doctest::Approx(0.3));
+}
+
+namespace {
+
+/// Gmsh's mesh of `m` with its ears kept, as a user's file would give it:
+/// nodes and elements only, classified by projection (cad::classify).
+template <ElementFamily Family>
+Mesh<Family, WarpBlend, 3> unclassified_gmsh_mesh(const CadModel& m, cad::CadMeshOptions o) {
+  o.keep_ears = true;
+  const auto gmsh = cad::mesh_cad<Family, WarpBlend, 3>(m, o);
+  Mesh<Family, WarpBlend, 3> user(1, gmsh.nodes(), gmsh.elements());
+  cad::classify(user, m, 1e-7 * m.size());
+  return user;
+}
+
+/// The number of elements of each entity oriented against the others (the
+/// fewer of the two signs): by the signed volume of a tetrahedron; for a
+/// surface mesh, its normal at its first corner dotted with its face's at
+/// the projection of its centroid (Gmsh orients each face's elements alike;
+/// a triangle across a sharp bend of the face can still count as flipped).
+template <ElementFamily Family>
+std::map<int, int> flipped_elements(const Mesh<Family, WarpBlend, 3>& mesh, const CadModel& m) {
+  std::map<int, std::vector<double>> out;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const Eigen::Vector3d a = mesh.node(mesh.vertex(e, 0)), b = mesh.node(mesh.vertex(e, 1));
+    // (of a quad: the other neighbour of corner 0)
+    const Eigen::Vector3d c = mesh.node(mesh.vertex(e, Family::is_simplex ? 2 : 3));
+    const int entity = mesh.element_entities()[e];
+    if constexpr (Family::dim == 3) {
+      out[entity].push_back((b - a).dot((c - a).cross(Eigen::Vector3d(mesh.node(mesh.vertex(e, 3))) - a)));
+    } else {
+      const auto s = m.surface(entity);
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (int k = 0; k < Family::num_vertices; ++k) centroid += mesh.node(mesh.vertex(e, k)) / Family::num_vertices;
+      const auto d = s.derivatives(s.project(centroid));
+      out[entity].push_back((b - a).cross(c - a).dot(d.col(0).cross(d.col(1))));
+    }
+  }
+  std::map<int, int> flipped;
+  for (const auto& [entity, signs] : out) {
+    const auto positive = std::count_if(signs.begin(), signs.end(), [](double v) { return v > 0.0; });
+    flipped[entity] = int(std::min<std::ptrdiff_t>(positive, std::ssize(signs) - positive));
+  }
+  return flipped;
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("a user's linear mesh, classified by projection, gets the ears Gmsh's lines would split",
+                   Family, Simplex<3>, Simplex<2>, Cube<2>) {
+  // A prism on a thin ellipse (semi-axes 1 and 0.08): at each sharp end of
+  // the ellipse the coarse mesh of a cap has an element with two edges on it.
+  const TempDir dir;
+  const std::string path = dir / "thin_prism.brep";
+  const gp_Elips ellipse(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 1.0, 0.08);
+  const BRepBuilderAPI_MakeFace cap(BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(ellipse).Edge()).Wire(), true);
+  REQUIRE(cap.IsDone());
+  REQUIRE(BRepTools::Write(BRepPrimAPI_MakePrism(cap.Face(), gp_Vec(0, 0, 0.5)).Shape(), path.c_str()));
+  const auto m = cad::read_cad(path);
+  REQUIRE(m.num_solids() == 1);
+  int sizes_with_ears = 0;
+  for (double size : {0.2, 0.3, 0.5}) {
+    CAPTURE(size);
+    cad::CadMeshOptions o;
+    o.size = size;
+    auto mesh = unclassified_gmsh_mesh<Family>(m, o);
+    const int nodes = mesh.num_nodes(), elements = mesh.num_elements();
+    const auto flipped_before = flipped_elements(mesh, m);
+    const int ears = cad::split_mesh_ears(mesh, m);
+    // The reference: Gmsh's mesh split through its own curve lines.
+    const auto split_by_gmsh = cad::mesh_cad<Family, WarpBlend, 3>(m, o);
+    CHECK(mesh.num_elements() == split_by_gmsh.num_elements());
+    CHECK(mesh.num_nodes() == split_by_gmsh.num_nodes());
+    const int nodes_per_ear = Family::is_simplex ? 1 : 4, elements_per_ear = Family::is_simplex ? 2 : 4;
+    CHECK(mesh.num_nodes() == nodes + nodes_per_ear * ears);
+    CHECK(mesh.num_elements() >= elements + elements_per_ear * ears);
+    if (ears == 0) continue;
+    ++sizes_with_ears;
+    cad::classify(mesh, m, 1e-7 * m.size());  // the new nodes lie on the model
+    CHECK(flipped_elements(mesh, m) == flipped_before);
+    CHECK(cad::split_mesh_ears(mesh, m) == 0);
+  }
+  CHECK(sizes_with_ears > 0);
 }
 
 TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {

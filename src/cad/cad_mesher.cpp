@@ -505,7 +505,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   // A volume mesh's boundary ears are split with their tetrahedra: the
   // flat-corner split of the curving pipeline (hom/mesh/flat_corners.hpp)
   // splits an interior edge, and an ear's third edge is on the boundary.
-  if (o.dim == 3 || o.quads || o.split_triangle_ears) {
+  if (!o.keep_ears && (o.dim == 3 || o.quads || o.split_triangle_ears)) {
     const FaceGeometry faces{[&](int f, const Eigen::Vector3d& x) { return geometry.surface(f)->project(x); },
                              [&](int f, const Eigen::Vector2d& uv) { return geometry.surface(f)->evaluate(uv); },
                              [&](int c, const Eigen::Vector3d& x) -> Eigen::Vector3d {

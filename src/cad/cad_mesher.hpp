@@ -72,6 +72,9 @@ struct CadMeshOptions {
   /// by the curving pipeline (hom/mesh/flat_corners.hpp). A volume mesh's
   /// boundary ears are always split, each with the tetrahedron on it.
   bool split_triangle_ears = false;
+  /// Leave every ear as Gmsh made it (to compare with split_mesh_ears, which
+  /// splits the ears of a mesh that comes without Gmsh's curve lines).
+  bool keep_ears = false;
   double size = 0.0;             ///< Mesh.MeshSizeMax; 0: default_mesh_size(model)
   double size_min = 0.0;         ///< Mesh.MeshSizeMin
   int size_from_curvature = 0;   ///< Mesh.MeshSizeFromCurvature: elements per 2 pi radians; 0: off

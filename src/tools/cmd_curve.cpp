@@ -81,6 +81,7 @@
 #include "curve_models.hpp"
 #include "hom/optimize/solve.hpp"
 #include "layer_options.hpp"
+#include "mesh_ears.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
 
@@ -270,6 +271,18 @@ void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::
   std::fflush(stdout);
 }
 
+/// A linear --mesh's ears (src/cad/mesh_ears.hpp), split like those of hom's
+/// own meshes: once curved, their corner on the CAD curve has det D phi = 0.
+template <class MeshT>
+void split_ears_of_user_mesh(MeshT& mesh, const hom::cad::CadModel& cad, double tolerance) {
+  const int ears = hom::cad::split_mesh_ears(mesh, cad);
+  if (ears == 0) return;
+  hom::tools::classify_user_mesh(mesh, cad, tolerance);  // the new nodes, on the ears' faces
+  std::printf("linear mesh: %d ears split (a boundary %s whose two edges at a corner lie on one CAD curve: "
+              "flat there once curved, whatever the free nodes do); %d elements, %d nodes\n",
+              ears, MeshT::family::is_simplex ? "triangle" : "quadrilateral", mesh.num_elements(), mesh.num_nodes());
+}
+
 int run(int argc, char** argv) {
   CurveCli o;
   po::options_description opts(
@@ -403,6 +416,7 @@ int run(int argc, char** argv) {
           throw hom::tools::UsageError("curve: --bl-first needs a linear tetrahedral --mesh; " + o.mesh + " holds " +
                                        std::string(F::name) + " of degree " + std::to_string(mesh.degree()));
         hom::tools::classify_user_mesh(mesh, cad, o.tolerance * cad.size());
+        if constexpr (M::space_dim == 3) split_ears_of_user_mesh(mesh, cad, o.tolerance * cad.size());
         if constexpr (M::dim == 3)
           if (o.bl_first > 0.0) return hom::tools::boundary_layer_and_write(cad, mesh, boundary_layer_options(o), co);
         return hom::tools::curve_and_write(cad, mesh, co, elapsed());
