@@ -137,9 +137,9 @@ FULL = [
                                                        "t106_cascade", "--certify"],
          timeout=4 * 3600),
     dict(name="curve_peer", binary="bench_curve",
-         args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3", "--certify", "--threads", "1",
+         args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3,4,5", "--certify", "--threads", "1",
                "--optimizer-peer", "gmsh", "--peer-timeout", "1800"], timeout=4 * 3600, role="peer",
-         conditions="two real CAD models (../shared/data/cad) at p = 2, 3, hom and Gmsh on 1 thread each: hom's "
+         conditions="two real CAD models (../shared/data/cad) at p = 2 to 5, hom and Gmsh on 1 thread each: hom's "
                     "volume stage (stopping 5 iterations "
                     "after the mesh is valid, bench_curve's default, then certified and repaired) and Gmsh's "
                     "optimizer from the same initial curved mesh"),
