@@ -1023,8 +1023,8 @@ def peer_section(reports, runs):
     if rows:
         out += ["Untangling (table 4.1's pipeline): the same perturbed mesh through hom and through Gmsh's high-order "
                 "optimizer (Mesh.HighOrderOptimize, child process), both judged by hom's shape quality. hom's peak "
-                "memory is the whole harness process's. Gmsh's modes: 1 optimization, 2 elastic analogy then optimization, "
-                "3 elastic analogy, 4 fast curving. Its optimization works on patches around the elements whose scaled "
+                "memory is the whole harness process's. Gmsh's modes: 1 optimization, 2 elastic analogy then "
+                "optimization, 3 elastic analogy, 4 fast curving. Its optimization works on patches around the elements whose scaled "
                 "Jacobian lies outside [Mesh.HighOrderThresholdMin, Max] = [0.1, 2]: where none is (mode 1 on the "
                 "unperturbed mesh at p = 2, mode 2 after its elastic step at p = 2) it returns at once.", "",
                 md_table(["case", "Gmsh", "Gmsh status"] + PEER_COLUMNS + ["peak MB hom", "peak MB Gmsh"], rows),
@@ -1241,8 +1241,8 @@ def write_report(args, meta, runs, reports, out_dir, work, total_s):
                                " (the thesis's sizes)"),
              "- build: `%s`" % os.path.relpath(args.build, REPO),
              "- total wall time of the runs: %.0f s, CPU time of the harnesses %.0f s (every timing in this report "
-             "was taken on this machine as it was: where the CPU time is well below wall time x cores the machine was shared "
-             "with other work, and wall times are pessimistic)" % (total_s, sum(r.get("cpu_s") or 0 for r in runs.values())),
+             "was taken on this machine as it was: where the CPU time is well below wall time x cores the machine "
+             "was shared with other work, and wall times are pessimistic)" % (total_s, sum(r.get("cpu_s") or 0 for r in runs.values())),
              ""]
     lines += ["## Runs", "",
               md_table(["part", "command", "wall s", "CPU s", "status", "claim checks", "run at"],
