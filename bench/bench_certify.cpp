@@ -172,19 +172,6 @@ void print_stage(int p, const StageResult& r) {
   std::fflush(stdout);
 }
 
-std::vector<int> parse_degrees(const std::string& s) {
-  std::vector<int> d;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    const int p = std::stoi(item);
-    if (p < 1 || p > 10) throw std::invalid_argument("--p: degrees must be in 1..10");
-    d.push_back(p);
-  }
-  if (d.empty()) throw std::invalid_argument("--p: no degree given");
-  return d;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -226,7 +213,7 @@ int main(int argc, char** argv) {
       std::cout << opts << "\n";
       return 0;
     }
-    ps = parse_degrees(degrees);
+    ps = hom::bench::parse_int_list(degrees, "--p", 1, 10);
     if (depth < 0 || depth > 20) throw std::invalid_argument("--depth must be in 0..20");
     if (peer != "gmsh" && peer != "none") throw std::invalid_argument("--peer: expected gmsh or none, got '" + peer + "'");
   } catch (const std::exception& e) {

@@ -69,7 +69,9 @@
 /// volume stage (0 iterations, no p-continuation, no certificate); Gmsh's
 /// result is judged with the stages' quality (shape measure, straight-sided
 /// ideal), printed as a "gmsh" line and stored as the volume's optimized
-/// case's "optimizer_peer".
+/// case's "optimizer_peer". --peer-mode takes a list (2,3,4): every mode
+/// starts from the same mesh, built once; the first mode's entry is
+/// "optimizer_peer", every mode's "optimizer_peers".
 ///
 /// Exit status: 0 when every case gives a valid mesh, 1 when a case is
 /// invalid or fails (the error is printed and recorded), 2 on bad options.
@@ -141,7 +143,7 @@ struct Settings {
   bool gmsh_peer = true;  ///< with certify: Gmsh's validity analysis of each volume or planar result beside hom's
   std::string optimizer_peer = "none";  ///< --optimizer-peer: none | gmsh (tetrahedral cases)
   double peer_timeout = 1800;           ///< --peer-timeout, seconds per Gmsh run
-  int peer_mode = 1;                    ///< --peer-mode: Mesh.HighOrderOptimize
+  std::vector<int> peer_modes = {1};    ///< --peer-mode: Mesh.HighOrderOptimize, one run per mode
 };
 
 const char* kind_name(Kind k) {
@@ -274,17 +276,27 @@ class Runner {
     cases_.back().set("peer", hom::meshing::peer_json(peer));
   }
 
-  /// Gmsh's optimizer on the mesh hom's volume stage starts from (see the
-  /// file comment); its entry goes to the last case, the volume's optimized
-  /// stage.
+  /// Gmsh's optimizer, each --peer-mode, on the mesh hom's volume stage
+  /// starts from (see the file comment); the entries go to the last case,
+  /// the volume's optimized stage.
   void run_optimizer_peer(const hom::cad::CadModel& cad, const hom::cad::CurvedMesh<hom::Simplex<3>, 3>& linear,
                           hom::cad::CurveOptions o) {
     o.max_iterations = 0;
     o.pcont = hom::cad::CurveOptions::Continuation::off;
     o.certify = false;
     const auto start = hom::cad::curve_mesh<hom::Simplex<3>, 3>(cad, linear, o);
+    hom::io::Json::Array entries;
+    for (int mode : s_.peer_modes) entries.push_back(run_gmsh_optimizer(start, mode));
+    cases_.back().set("optimizer_peer", entries.front());
+    if (entries.size() > 1) cases_.back().set("optimizer_peers", hom::io::Json(std::move(entries)));
+  }
+
+  /// One Gmsh optimizer run (Mesh.HighOrderOptimize = mode) from `start`:
+  /// its line, its status and its JSON entry.
+  hom::io::Json run_gmsh_optimizer(const hom::cad::CurveResult<hom::cad::CurvedMesh<hom::Simplex<3>, 3>>& start,
+                                   int mode) {
     hom::meshing::GmshPeerOptions po;
-    po.mode = s_.peer_mode;
+    po.mode = mode;
     po.time_limit_s = s_.peer_timeout;
     po.threads = s_.threads;
     std::printf("   gmsh peer (Mesh.HighOrderOptimize = %d, limit %.0f s) from the initial curved mesh "
@@ -302,7 +314,7 @@ class Runner {
                   quality.inverted, scaled_jacobian.min, run.time_s);
     }
     hom::bench::print_gmsh_peer_status(run, s_.peer_timeout, scaled_jacobian.min, "   ");
-    cases_.back().set("optimizer_peer", hom::bench::gmsh_peer_json(run, s_.peer_timeout, quality, scaled_jacobian));
+    return hom::bench::gmsh_peer_json(run, s_.peer_timeout, quality, scaled_jacobian);
   }
 
   void report(const Case& c, const hom::cad::CadModel& cad, const std::string& family, int p,
@@ -490,22 +502,12 @@ std::vector<Case> all_cases(const fs::path& data) {
   return cases;
 }
 
-std::vector<int> parse_degrees(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) out.push_back(std::stoi(item));
-  for (int p : out)
-    if (p < 2 || p > 15) throw std::invalid_argument("--p: degrees must be in 2..15");
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   Settings s;
   std::vector<std::string> names;
-  std::string degrees, json, data;
+  std::string degrees, json, data, peer_modes = "1";
   bool no_peer = false;
   po::options_description desc(
       "bench_curve [options]: chapter 6's a posteriori pipeline on the built-in cases and the real CAD\n"
@@ -532,8 +534,9 @@ int main(int argc, char** argv) {
        "judged by the same quality measure (stored as the optimized case's \"optimizer_peer\")")  //
       ("peer-timeout", po::value(&s.peer_timeout)->default_value(1800),
        "wall-clock limit of each Gmsh run, seconds")  //
-      ("peer-mode", po::value(&s.peer_mode)->default_value(1),
-       "Mesh.HighOrderOptimize: 1 optimization, 2 elastic + optimization, 3 elastic, 4 fast curving");
+      ("peer-mode", po::value(&peer_modes)->default_value("1"),
+       "Mesh.HighOrderOptimize: 1 optimization, 2 elastic + optimization, 3 elastic, 4 fast curving; a list "
+       "(2,3,4) runs each mode from the same initial mesh");
   std::vector<int> forced;
   try {
     po::variables_map vm;
@@ -548,8 +551,8 @@ int main(int argc, char** argv) {
     if (s.optimizer_peer != "none" && s.optimizer_peer != "gmsh")
       throw std::invalid_argument("--optimizer-peer: expected none or gmsh, got '" + s.optimizer_peer + "'");
     if (!(s.peer_timeout > 0)) throw std::invalid_argument("--peer-timeout must be positive");
-    if (s.peer_mode < 1 || s.peer_mode > 4) throw std::invalid_argument("--peer-mode: expected 1, 2, 3 or 4");
-    if (!degrees.empty()) forced = parse_degrees(degrees);
+    s.peer_modes = hom::bench::parse_peer_modes(peer_modes);
+    if (!degrees.empty()) forced = hom::bench::parse_int_list(degrees, "--p", 2, 15);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_curve: %s\n", e.what());
     return 2;

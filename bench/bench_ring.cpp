@@ -557,28 +557,6 @@ QuadResult run_quads(const QuadMesh& linear, int p, const Options& o, FigureData
   return r;
 }
 
-// ---------------------------------------------------------------------------
-
-std::vector<int> parse_degrees(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    std::size_t used = 0;
-    int p = 0;
-    try {
-      p = std::stoi(item, &used);
-    } catch (const std::exception&) {
-      throw std::invalid_argument("--p: '" + item + "' is not a degree");
-    }
-    if (used != item.size()) throw std::invalid_argument("--p: '" + item + "' is not a degree");
-    if (p < 1 || p > 15) throw std::invalid_argument("--p: degree " + item + " out of range 1..15");
-    out.push_back(p);
-  }
-  if (out.empty()) throw std::invalid_argument("--p: no degree given");
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -619,7 +597,7 @@ int main(int argc, char** argv) {
       std::cout << desc << "\n";
       return 0;
     }
-    o.degrees = parse_degrees(degrees.empty() ? (o.quick ? "3,4" : "3,4,5,10") : degrees);
+    o.degrees = hom::bench::parse_int_list(degrees.empty() ? (o.quick ? "3,4" : "3,4,5,10") : degrees, "--p", 1, 15);
     hom::parse_solver_kind(o.solver);  // throws on an unknown name
     if (o.threads < 0) throw std::invalid_argument("--threads must be >= 0");
     if (o.repeat < 1) throw std::invalid_argument("--repeat must be >= 1");

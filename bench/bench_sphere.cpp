@@ -69,6 +69,7 @@
 #include "hom/measure/shape_measure.hpp"
 #include "hom/optimize/optimize.hpp"
 #include "hom/quality/mesh_quality.hpp"
+#include "harness.hpp"
 #include "sphere_mesh.hpp"
 
 #ifndef HOM_VERSION
@@ -433,20 +434,6 @@ void print_runs(const std::vector<CaseResult>& results) {
                   s->relative_sj.min, s->peak_rss_mb);
 }
 
-std::vector<int> parse_degrees(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    std::size_t used = 0;
-    const int p = std::stoi(item, &used);
-    if (used != item.size() || p < 1 || p > 12) throw std::invalid_argument("--p: degree '" + item + "' out of range 1..12");
-    out.push_back(p);
-  }
-  if (out.empty()) throw std::invalid_argument("--p: no degree given");
-  return out;
-}
-
 void write_outputs(const std::vector<CaseResult>& results, const Options& o, int threads) {
   const std::string csv_path = (o.out / "sphere.csv").string();
   std::ostringstream csv;
@@ -552,7 +539,7 @@ int main(int argc, char** argv) {
       std::cout << desc << "\n";
       return 0;
     }
-    o.degrees = parse_degrees(degrees.empty() ? (o.quick ? "2,4" : "2,4,6") : degrees);
+    o.degrees = hom::bench::parse_int_list(degrees.empty() ? (o.quick ? "2,4" : "2,4,6") : degrees, "--p", 1, 12);
     o.seed = seed;
     if (vm.count("perturb")) {
       if (!(perturb >= 0.0)) throw std::invalid_argument("--perturb must be >= 0");

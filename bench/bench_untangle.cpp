@@ -26,6 +26,9 @@
 /// optimizer (Mesh.HighOrderOptimize = --peer-mode) in a child process under
 /// --peer-timeout (src/meshing/gmsh_peer.hpp); hom's quality of its result is
 /// printed as a "gmsh" row beside hom's and stored as the case's "peer".
+/// --peer-mode takes a list (2,3,4): each mode runs on the same input after
+/// one hom run, so a slow degree (p = 10) is optimized by hom once; the first
+/// mode's entry is the case's "peer", every mode's the case's "peers".
 /// Off by default: Gmsh 4.8.4 needs minutes to hours on this case.
 ///
 /// Output: the table beside the thesis's rows on stdout; CSV (untangle.csv)
@@ -226,7 +229,7 @@ struct Options {
   double target_quality = 0.0;
   std::string peer = "none";   ///< --peer: none | gmsh
   double peer_timeout = 600;   ///< --peer-timeout, seconds
-  int peer_mode = 1;           ///< --peer-mode: Mesh.HighOrderOptimize
+  std::vector<int> peer_modes = {1};  ///< --peer-mode: Mesh.HighOrderOptimize, one run per mode
 };
 
 /// OUT/untangle_pP_<stage>.vtu and OUT/untangle_pP_<stage>_cut.csv, as
@@ -249,12 +252,14 @@ struct PeerRow {
   double time_limit_s = 0.0;
 };
 
-PeerRow run_peer(const TetMesh& perturbed, int p, const Options& o) {
+/// Gmsh's result's files are named after stage "gmsh" for the first mode
+/// (figure 4.7's cut shows it), "gmsh_modeM" for the others.
+PeerRow run_peer(const TetMesh& perturbed, int p, int mode, const Options& o) {
   hom::meshing::GmshPeerOptions po;
-  po.mode = o.peer_mode;
+  po.mode = mode;
   po.time_limit_s = o.peer_timeout;
   po.threads = o.threads;
-  std::printf("p = %d: gmsh peer (Mesh.HighOrderOptimize = %d, limit %.0f s) ...\n", p, o.peer_mode, o.peer_timeout);
+  std::printf("p = %d: gmsh peer (Mesh.HighOrderOptimize = %d, limit %.0f s) ...\n", p, mode, o.peer_timeout);
   std::fflush(stdout);
   PeerRow row;
   row.time_limit_s = o.peer_timeout;
@@ -263,7 +268,8 @@ PeerRow run_peer(const TetMesh& perturbed, int p, const Options& o) {
     const auto q = evaluate(row.run.mesh, o.quadrature);
     row.stage = make_stage("gmsh", q);
     row.stage.time_s = row.run.time_s;
-    write_stage_files(o, p, "gmsh", row.run.mesh, q);
+    const bool first_mode = mode == o.peer_modes.front();
+    write_stage_files(o, p, first_mode ? "gmsh" : "gmsh_mode" + std::to_string(mode), row.run.mesh, q);
   }
   row.run.mesh = TetMesh();
   return row;
@@ -304,7 +310,7 @@ struct CaseResult {
   std::vector<Stage> stages;
   bool valid_at_end = false;
   bool optimized = false;
-  std::optional<PeerRow> peer;
+  std::vector<PeerRow> peers;  ///< one per --peer-mode, in its order
 };
 
 CaseResult run_case(const TetMesh& linear, const hom::GeometryModel<3>& geometry, int p, const Options& o) {
@@ -379,7 +385,8 @@ CaseResult run_case(const TetMesh& linear, const hom::GeometryModel<3>& geometry
               "stopping after the initial statistics.\n",
               p);
 #endif
-  if (peer_input) r.peer = run_peer(*peer_input, p, o);
+  if (peer_input)
+    for (int mode : o.peer_modes) r.peers.push_back(run_peer(*peer_input, p, mode, o));
   return r;
 }
 
@@ -396,7 +403,7 @@ void print_case(const CaseResult& r) {
     if (t && s.name == "optimized") tr = &t->smoothed;
     print_row(s.name == "optimized" ? "smoothed" : s.name, s.quality, tr);
   }
-  if (r.peer) print_peer(*r.peer);
+  for (const auto& peer : r.peers) print_peer(peer);
   for (const auto& s : r.stages)
     if (s.name == "optimized")
       std::printf("  solver %s, %d iterations (%s), %.2f s (valid after %s s, min quality >= 0.96 after %s s), "
@@ -406,25 +413,12 @@ void print_case(const CaseResult& r) {
   std::fflush(stdout);
 }
 
-std::vector<int> parse_degrees(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    const int p = std::stoi(item);
-    if (p < 1 || p > 20) throw std::invalid_argument("--p: degree " + item + " out of range 1..20");
-    out.push_back(p);
-  }
-  if (out.empty()) throw std::invalid_argument("--p: no degree given");
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   namespace po = boost::program_options;
   Options o;
-  std::string degrees, quadrature = "default", json, hessian;
+  std::string degrees, quadrature = "default", json, hessian, peer_modes = "1";
   std::uint64_t seed = 1;
   double perturb = 0.0;
   po::options_description desc(
@@ -470,8 +464,9 @@ int main(int argc, char** argv) {
        "--peer-timeout), judged by the same quality measure; its row is printed as 'gmsh', and goes to the "
        "CSV and to the JSON case of the optimized stage as \"peer\"")
       ("peer-timeout", po::value(&o.peer_timeout)->default_value(600), "wall-clock limit of the peer run, seconds")
-      ("peer-mode", po::value(&o.peer_mode)->default_value(1),
-       "Gmsh's Mesh.HighOrderOptimize: 1 optimization, 2 elastic + optimization, 3 elastic, 4 fast curving");
+      ("peer-mode", po::value(&peer_modes)->default_value("1"),
+       "Gmsh's Mesh.HighOrderOptimize: 1 optimization, 2 elastic + optimization, 3 elastic, 4 fast curving; "
+       "a list (2,3,4) runs each mode on the same input after one hom run");
   // clang-format on
   try {
     po::variables_map vm;
@@ -481,7 +476,8 @@ int main(int argc, char** argv) {
       std::cout << desc << "\n";
       return 0;
     }
-    o.degrees = parse_degrees(degrees.empty() ? (o.quick ? "2,5" : "2,5,10") : degrees);
+    o.degrees = hom::bench::parse_int_list(degrees.empty() ? (o.quick ? "2,5" : "2,5,10") : degrees, "--p", 1, 20);
+    o.peer_modes = hom::bench::parse_peer_modes(peer_modes);
     o.seed = seed;
     if (vm.count("perturb")) {
       if (!(perturb >= 0.0)) throw std::invalid_argument("--perturb must be >= 0");
@@ -509,7 +505,6 @@ int main(int argc, char** argv) {
     (void)hom::parse_regularization_scope(o.scope);  // throws on an unknown name
     if (o.peer != "none" && o.peer != "gmsh") throw std::invalid_argument("--peer: expected none or gmsh, got '" + o.peer + "'");
     if (!(o.peer_timeout > 0)) throw std::invalid_argument("--peer-timeout must be positive");
-    if (o.peer_mode < 1 || o.peer_mode > 4) throw std::invalid_argument("--peer-mode: expected 1, 2, 3 or 4");
   } catch (const std::exception& e) {
     std::cerr << "bench_untangle: " << e.what() << "\n";
     return 2;
@@ -582,10 +577,16 @@ int main(int argc, char** argv) {
             .set("p_continuation", o.pcont)
             .set("regularization_scope", o.scope)
             .set("thesis", tr ? row_json(*tr, t->elements, t->nodes) : Json())
-            .set("peer", r.peer && s.name == "optimized" ? peer_json(*r.peer) : Json());
+            .set("peer", !r.peers.empty() && s.name == "optimized" ? peer_json(r.peers.front()) : Json());
+        if (r.peers.size() > 1 && s.name == "optimized") {
+          Json::Array peers;
+          for (const auto& peer : r.peers) peers.push_back(peer_json(peer));
+          c.set("peers", Json(std::move(peers)));
+        }
         cases.push_back(std::move(c));
       }
-      if (r.peer) csv << peer_csv(*r.peer, r.p, r.elements, r.nodes, r.perturbation, o.seed, quadrature_name(o.quadrature));
+      for (const auto& peer : r.peers)
+        csv << peer_csv(peer, r.p, r.elements, r.nodes, r.perturbation, o.seed, quadrature_name(o.quadrature));
     }
     const std::string text = csv.str();
     hom::io::write_atomically(csv_path, [&](std::FILE* f) { hom::io::write_all(f, csv_path, text.data(), text.size()); });

@@ -17,6 +17,8 @@
 #include <limits>
 #include <map>
 #include <random>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -152,6 +154,41 @@ int perturb_free_nodes(MeshT& mesh, double amplitude, std::uint64_t seed) {
     ++moved;
   }
   return moved;
+}
+
+/// The integers of a comma-separated option value ("2,5,10"), each in
+/// [lo, hi]; `option` names the option in the error ("--p").
+inline std::vector<int> parse_int_list(const std::string& text, const std::string& option, int lo, int hi) {
+  std::vector<int> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    int v = 0;
+    try {
+      v = std::stoi(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size()) throw std::invalid_argument(option + ": '" + item + "' is not an integer");
+    if (v < lo || v > hi)
+      throw std::invalid_argument(option + ": " + item + " is out of range " + std::to_string(lo) + ".." +
+                                  std::to_string(hi));
+    out.push_back(v);
+  }
+  if (out.empty()) throw std::invalid_argument(option + ": no value given");
+  return out;
+}
+
+/// --peer-mode's value: Gmsh's Mesh.HighOrderOptimize modes (1 to 4), each
+/// named once ("2,3,4": one peer run per mode).
+inline std::vector<int> parse_peer_modes(const std::string& text) {
+  const auto modes = parse_int_list(text, "--peer-mode", 1, 4);
+  for (std::size_t i = 0; i < modes.size(); ++i)
+    if (std::count(modes.begin(), modes.begin() + i, modes[i]))
+      throw std::invalid_argument("--peer-mode: mode " + std::to_string(modes[i]) + " is named twice in '" + text +
+                                  "'");
+  return modes;
 }
 
 /// The thesis's claims a harness checks: each one is recorded (for the

@@ -19,6 +19,20 @@ start=$(date +%s)
   --skip surface_appendixF,curve_cube,untangle_newton,untangle_pcont || { echo "FAIL: paper/make exit $?"; exit 1; }
 echo "paper/make --quick took $(( $(date +%s) - start )) s"
 "$py" "$here/check_report.py" "$work/out/report.md" || exit 1
+# The quick untangling run names two Gmsh modes (--peer-mode 3,4): hom runs once, Gmsh once per
+# mode, and the peer table has a row for each.
+for mode in 3 4; do
+  grep -q "^| perturbed p = 2 | mode $mode | " "$work/out/report.md" ||
+    { echo "FAIL: no peer row for Gmsh mode $mode in the report"; exit 1; }
+done
+"$py" -c 'import json, sys
+opt = [c for c in json.load(open(sys.argv[1]))["cases"] if c["stage"] == "optimized"]
+assert len(opt) == 1 and [p["mode"] for p in opt[0]["peers"]] == [3, 4], opt
+assert opt[0]["peer"] == opt[0]["peers"][0]' "$work/runs/untangle.json" ||
+  { echo "FAIL: bench_untangle --peer-mode 3,4: the optimized case's peers"; exit 1; }
+"$build/bench/bench_untangle" --peer gmsh --peer-mode 3,3 >"$work/bad.txt" 2>&1
+[[ $? -eq 2 ]] && grep -q "named twice" "$work/bad.txt" ||
+  { echo "FAIL: bench_untangle --peer-mode 3,3 is not refused"; cat "$work/bad.txt"; exit 1; }
 # A new work directory (a fresh checkout) gathers the same report again from what the first one
 # kept beside it (data/runs.json, data/*.json, figures/): only the lines that name how and where
 # it was made may differ.

@@ -52,10 +52,11 @@ QUICK = [
     dict(name="surface_appendixF", binary="bench_surface", args=["--case", "appendixF", "--grid", "61"],
          conditions="appendix F level sets on a 61 x 61 grid (the full mode: 101 x 101)"),
     dict(name="untangle", binary="bench_untangle",
-         args=["--quick", "--p", "2", "--peer", "gmsh", "--peer-mode", "3", "--peer-timeout", "60"],
+         args=["--quick", "--p", "2", "--peer", "gmsh", "--peer-mode", "3,4", "--peer-timeout", "60"],
          conditions="coarser linear mesh (--quick: 823 instead of 1441 tetrahedra) at p = 2; p = 5 on the full "
                     "mesh is the next run, p = 10 (about 2.5 minutes) is in the full mode only. Gmsh peer in its fast "
-                    "elastic mode (Mesh.HighOrderOptimize = 3); its optimization mode 1 needs more than 2 minutes even here"),
+                    "modes (Mesh.HighOrderOptimize = 3, elastic, and 4, fast curving); its optimization mode 1 needs "
+                    "more than 2 minutes even here"),
     dict(name="untangle_p5", binary="bench_untangle", args=["--p", "5", "--pcont", "--no-vtu"],
          conditions="the full linear mesh (1436 tetrahedra against the thesis's 1441) at p = 5, matrix-free Newton with "
                     "p-continuation, no peer"),
@@ -114,6 +115,10 @@ FULL = [
          args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "3", "--peer-timeout", "1800", "--no-vtu", "--no-cut"], role="peer"),
     dict(name="untangle_peer_mode4", binary="bench_untangle",
          args=["--p", "2,5", "--peer", "gmsh", "--peer-mode", "4", "--peer-timeout", "1800", "--no-vtu", "--no-cut"], role="peer"),
+    dict(name="untangle_p10_peer_modes", binary="bench_untangle",
+         args=["--p", "10", "--peer", "gmsh", "--peer-mode", "2,3,4", "--peer-timeout", "1800", "--no-vtu",
+               "--no-cut"], timeout=4 * 3600, role="peer",
+         conditions="the perturbed cube at p = 10 through hom once and Gmsh's modes 2, 3 and 4"),
     dict(name="untangle_newton", binary="bench_untangle", args=["--p", "5", "--solver", "newton", "--no-vtu", "--no-cut"],
          role="solver"),
     dict(name="untangle_gs", binary="bench_untangle", args=["--p", "5", "--solver", "gauss-seidel", "--no-vtu", "--no-cut"],
@@ -143,6 +148,10 @@ FULL = [
                     "volume stage (stopping 5 iterations "
                     "after the mesh is valid, bench_curve's default, then certified and repaired) and Gmsh's "
                     "optimizer from the same initial curved mesh"),
+    dict(name="curve_peer_modes", binary="bench_curve",
+         args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3", "--certify", "--threads", "1",
+               "--optimizer-peer", "gmsh", "--peer-mode", "2,3,4", "--peer-timeout", "1800"], timeout=4 * 3600,
+         role="peer", conditions="curve_peer's cases at p = 2 and 3 against Gmsh's modes 2, 3 and 4"),
     dict(name="boundary_layer_wing", binary="bench_boundary_layer", args=["--case", "wing", "--p", "2"],
          timeout=4 * 3600,
          conditions="the wing section of the full boundary_layer run at the thesis's p = 2 of table 4.3"),
@@ -977,49 +986,64 @@ def peer_verdicts(rows, first, mode):
     return out
 
 
+def peers_of(case, key):
+    """A case's peer entries: the list under KEY + "s" (one per Gmsh mode of a multi-mode run), else KEY's."""
+    return case.get(key + "s") or ([case[key]] if case.get(key) else [])
+
+
 def cad_peer_rows(reports):
     """Chapter 6's volume stage against Gmsh's optimizer on real CAD (bench_curve --optimizer-peer gmsh)."""
-    rows = []
-    initial = {}
-    for _, c in cases_of(reports, "curve_peer"):
-        if c.get("part") != "volume":
-            continue
-        if c.get("stage") == "initial":
-            initial[(c.get("name"), c.get("p"))] = c
-        peer = c.get("optimizer_peer")
-        if c.get("stage") != "optimized" or not peer:
-            continue
-        i = initial.get((c.get("name"), c.get("p")), {})
-        rows.append(["%s p = %s" % (c.get("name"), c.get("p")), num(c.get("elements")), "mode %s" % peer.get("mode"),
-                     peer.get("status")] + peer_cells(c, i, peer) + [num(peer.get("peak_rss_mb"), 0)])
+    keyed = []
+    for run in ("curve_peer", "curve_peer_modes"):
+        initial = {}
+        for _, c in cases_of(reports, run):
+            if c.get("part") != "volume":
+                continue
+            if c.get("stage") == "initial":
+                initial[(c.get("name"), c.get("p"))] = c
+            if c.get("stage") != "optimized":
+                continue
+            i = initial.get((c.get("name"), c.get("p")), {})
+            for peer in peers_of(c, "optimizer_peer"):
+                keyed.append(((c.get("name"), peer.get("mode"), c.get("p")),
+                              ["%s p = %s" % (c.get("name"), c.get("p")), num(c.get("elements")),
+                               "mode %s" % peer.get("mode"), peer.get("status")] + peer_cells(c, i, peer) +
+                              [num(peer.get("peak_rss_mb"), 0)]))
+    rows = [row for _, row in sorted(keyed, key=lambda kr: kr[0])]
     if not rows:
         return ["Gmsh on the CAD cases of chapter 6: not in this report (the full mode's run curve_peer, "
                 "bench_curve --optimizer-peer gmsh, did not run or found no CAD files).", ""]
     return ["Chapter 6's volume stage on real CAD: the curved mesh that hom's volume stage starts from (the same "
             "linear mesh, degree and boundary nodes on the CAD, held) through hom and through Gmsh's optimizer, "
             "both judged by hom's shape quality. hom's time is its volume stage's (with --certify, the certification "
-            "and repair included). Gmsh's optimizer works only on patches around the elements whose scaled Jacobian "
-            "lies outside [Mesh.HighOrderThresholdMin, Max] = [0.1, 2]: where the initial mesh has none it returns "
-            "at once, with the initial quality.", "",
+            "and repair included). Gmsh's modes as above (run curve_peer: mode 1 at p = 2 to 5; run "
+            "curve_peer_modes: modes 2, 3 and 4 at p = 2 and 3, each from the same initial mesh, hom's volume stage "
+            "run once for the three). Gmsh's optimizer works only on patches around the elements whose scaled "
+            "Jacobian lies outside [Mesh.HighOrderThresholdMin, Max] = [0.1, 2]: where the initial mesh has none it "
+            "returns at once, with the initial quality.", "",
             md_table(["case", "tetrahedra", "Gmsh", "Gmsh status"] + PEER_COLUMNS + ["peak MB Gmsh"], rows),
             ""] + peer_verdicts(rows, 4, 2)
 
 
 def peer_section(reports, runs):
     out = ["## Peer comparison: Gmsh 4.8.4 on identical inputs", ""]
-    rows = []
-    for run in ["untangle", "untangle_unperturbed_peer"] + ["untangle_peer_mode%d" % m for m in (2, 3, 4)]:
+    keyed = []
+    runs_with_peer = (["untangle", "untangle_unperturbed_peer"] + ["untangle_peer_mode%d" % m for m in (2, 3, 4)] +
+                      ["untangle_p10_peer_modes"])
+    for run in runs_with_peer:
         init = {}
+        input_name = "unperturbed" if "unperturbed" in run else "perturbed"
         for _, c in cases_of(reports, run):
             if c.get("stage") == "initial":
                 init[c.get("p")] = c
-            peer = c.get("peer")
-            if c.get("stage") != "optimized" or not peer:
+            if c.get("stage") != "optimized":
                 continue
-            rows.append(["%s p = %s" % ("unperturbed" if "unperturbed" in run else "perturbed", c.get("p")),
-                         "mode %s" % peer.get("mode"), peer.get("status")] +
-                        peer_cells(c, init.get(c.get("p"), {}), peer) +
-                        [num(c.get("peak_rss_mb"), 0), num(peer.get("peak_rss_mb"), 0)])
+            for peer in peers_of(c, "peer"):
+                keyed.append(((input_name == "unperturbed", peer.get("mode"), c.get("p")),
+                              ["%s p = %s" % (input_name, c.get("p")), "mode %s" % peer.get("mode"),
+                               peer.get("status")] + peer_cells(c, init.get(c.get("p"), {}), peer) +
+                              [num(c.get("peak_rss_mb"), 0), num(peer.get("peak_rss_mb"), 0)]))
+    rows = [row for _, row in sorted(keyed, key=lambda kr: kr[0])]
     if rows:
         out += ["Untangling (table 4.1's pipeline): the same perturbed mesh through hom and through Gmsh's high-order "
                 "optimizer (Mesh.HighOrderOptimize, child process), both judged by hom's shape quality. hom's peak "

@@ -14,7 +14,7 @@
 # the failing cells marked. --refine-invalid: bad uses refused; with
 # ../shared, an uncertified wing_fuselage mesh made valid by meshing finer.
 # --size-ball and --vertex-size grade the mesh where they say. A user's
-# linear mesh gets its ears split.
+# linear mesh (tetrahedra, planar quadrilaterals) gets its ears split.
 #   $1 = hom
 source "$(dirname "$0")/cli_common.sh"
 hom=$1
@@ -325,4 +325,15 @@ echo "$log" | grep -e "ears split" -e "^valid" | sed 's/^/  [ears] /'
 grep -q "linear mesh: [1-9][0-9]* ears split" <<<"$log" || fail "--mesh with ears: no ear split: $log"
 [[ $rc -eq 0 && -s "$work/thin_p3.msh" ]] || fail "--mesh with ears: exit $rc or no mesh"
 "$hom" quality "$work/thin_p3.msh" >/dev/null || fail "--mesh with ears: hom quality finds the result invalid"
+# The same for planar quadrilaterals: the thin ellipse alone, Gmsh's quads of it.
+"$py" "$(dirname "$0")/thin_prism_model.py" "$work/thin_face.brep" "$work/thin_quads.msh" planar-quads ||
+  fail "could not write the thin ellipse's quadrilaterals (python3-gmsh)"
+log=$("$hom" curve "$work/thin_face.brep" --mesh "$work/thin_quads.msh" --p 3 -o "$work/thin_quads_p3.msh" \
+  --certify --threads 1 2>&1)
+rc=$?
+echo "$log" | grep -e "ears split" -e "^valid" | sed 's/^/  [planar quad ears] /'
+grep -q "linear mesh: [1-9][0-9]* ears split (a boundary quadrilateral" <<<"$log" ||
+  fail "planar quads with ears: no ear split: $log"
+[[ $rc -eq 0 && -s "$work/thin_quads_p3.msh" ]] || fail "planar quads with ears: exit $rc or no mesh"
+"$hom" quality "$work/thin_quads_p3.msh" >/dev/null || fail "planar quads with ears: hom quality finds it invalid"
 echo "OK"

@@ -1145,6 +1145,85 @@ TEST_CASE_TEMPLATE("a user's linear mesh, classified by projection, gets the ear
   CHECK(sizes_with_ears > 0);
 }
 
+namespace {
+
+/// A planar mesh classified on the model as hom::tools::classify_user_mesh
+/// does: lifted to z = 0, classified as a surface mesh, copied back.
+template <ElementFamily Family>
+void classify_planar(Mesh<Family, WarpBlend, 2>& mesh, const CadModel& m) {
+  typename Mesh<Family, WarpBlend, 3>::Coordinates lifted_nodes = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
+  lifted_nodes.topRows(2) = mesh.nodes();
+  Mesh<Family, WarpBlend, 3> lifted(1, lifted_nodes, mesh.elements());
+  cad::classify(lifted, m, 1e-7 * m.size());
+  mesh.node_classes() = lifted.node_classes();
+  mesh.element_entities() = lifted.element_entities();
+  mesh.entities() = lifted.entities();
+}
+
+/// Twice the signed area of each quadrilateral (its four corners).
+std::vector<double> signed_areas(const Mesh<Cube<2>, WarpBlend, 2>& mesh) {
+  std::vector<double> out;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    double twice = 0.0;
+    for (int k = 0; k < 4; ++k) {  // corners 0 to 3 go around the quadrilateral (Cube<2>::vertex_corner)
+      const Eigen::Vector2d a = mesh.node(mesh.vertex(e, k)), b = mesh.node(mesh.vertex(e, (k + 1) % 4));
+      twice += a.x() * b.y() - a.y() * b.x();
+    }
+    out.push_back(twice);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a user's planar quadrilateral mesh gets its ears split in the plane, as Gmsh's lines would") {
+  // The thin ellipse alone (semi-axes 1 and 0.08): a planar model in z = 0.
+  const TempDir dir;
+  const std::string path = dir / "thin_ellipse.brep";
+  const gp_Elips ellipse(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 1.0, 0.08);
+  const BRepBuilderAPI_MakeFace face(BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(ellipse).Edge()).Wire(), true);
+  REQUIRE(face.IsDone());
+  REQUIRE(BRepTools::Write(face.Face(), path.c_str()));
+  const auto m = cad::read_cad(path);
+  REQUIRE(m.num_faces() == 1);
+  cad::CadMeshOptions o;
+  o.size = 0.3;
+  cad::CadMeshOptions kept = o;
+  kept.keep_ears = true;
+  const auto gmsh = cad::mesh_cad<Cube<2>, WarpBlend, 2>(m, kept);
+  Mesh<Cube<2>, WarpBlend, 2> mesh(1, gmsh.nodes(), gmsh.elements());
+  classify_planar(mesh, m);
+  const int nodes = mesh.num_nodes(), elements = mesh.num_elements();
+  const int ears = cad::split_mesh_ears(mesh, m);
+  REQUIRE(ears > 0);
+  // The reference: Gmsh's mesh split through its own curve lines.
+  const auto split_by_gmsh = cad::mesh_cad<Cube<2>, WarpBlend, 2>(m, o);
+  CHECK(mesh.num_elements() == split_by_gmsh.num_elements());
+  CHECK(mesh.num_nodes() == split_by_gmsh.num_nodes());
+  CHECK(mesh.num_nodes() == nodes + 4 * ears);
+  CHECK(mesh.num_elements() == elements + 4 * ears);
+  // Every quadrilateral is turned as Gmsh's are; the new nodes lie inside the
+  // ellipse, near its sharp ends (x = -1 and 1), at both.
+  const auto areas = signed_areas(mesh);
+  CHECK(std::all_of(areas.begin(), areas.end(), [&](double a) { return a * areas.front() > 0.0; }));
+  bool left = false, right = false;
+  for (int i = nodes; i < mesh.num_nodes(); ++i) {
+    const Eigen::Vector2d x = mesh.node(i);
+    CHECK(x.x() * x.x() + x.y() * x.y() / (0.08 * 0.08) < 1.0);
+    CHECK(std::abs(x.x()) > 0.7);
+    (x.x() < 0 ? left : right) = true;
+  }
+  CHECK((left && right));
+  classify_planar(mesh, m);
+  CHECK(cad::split_mesh_ears(mesh, m) == 0);
+  // Planar triangles (Gmsh's, ears kept) are left to the curving pipeline's flat-corner split.
+  const auto gmsh_triangles = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, kept);
+  Mesh<Simplex<2>, WarpBlend, 2> triangles(1, gmsh_triangles.nodes(), gmsh_triangles.elements());
+  classify_planar(triangles, m);
+  CHECK(cad::split_mesh_ears(triangles, m) == 0);
+  CHECK(triangles.num_elements() == gmsh_triangles.num_elements());
+}
+
 TEST_CASE("real CAD files from ../shared/data/cad (skipped when absent)") {
   const auto dir = shared_cad_dir();
   if (!std::filesystem::exists(dir / "README.md")) {

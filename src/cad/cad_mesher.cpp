@@ -506,12 +506,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   // flat-corner split of the curving pipeline (hom/mesh/flat_corners.hpp)
   // splits an interior edge, and an ear's third edge is on the boundary.
   if (!o.keep_ears && (o.dim == 3 || o.quads || o.split_triangle_ears)) {
-    const FaceGeometry faces{[&](int f, const Eigen::Vector3d& x) { return geometry.surface(f)->project(x); },
-                             [&](int f, const Eigen::Vector2d& uv) { return geometry.surface(f)->evaluate(uv); },
-                             [&](int c, const Eigen::Vector3d& x) -> Eigen::Vector3d {
-                               const auto* curve = geometry.curve(c);
-                               return curve ? curve->derivative(curve->project(x)) : Eigen::Vector3d::Zero();
-                             }};
+    const FaceGeometry faces = face_geometry(geometry);
     if (o.quads)
       split_quad_ears(d, faces);
     else

@@ -301,6 +301,15 @@ bool split_triangle_ear(EarSplitter& s, const io::MshElement& e, const std::arra
 
 }  // namespace
 
+FaceGeometry face_geometry(const GeometryModel<3>& geometry) {
+  return {[&geometry](int f, const Eigen::Vector3d& x) { return geometry.surface(f)->project(x); },
+          [&geometry](int f, const Eigen::Vector2d& uv) { return geometry.surface(f)->evaluate(uv); },
+          [&geometry](int c, const Eigen::Vector3d& x) -> Eigen::Vector3d {
+            const auto* curve = geometry.curve(c);
+            return curve ? curve->derivative(curve->project(x)) : Eigen::Vector3d::Zero();
+          }};
+}
+
 int split_quad_ears(io::MshData& d, const FaceGeometry& faces) {
   return split_ears<4>(d, faces, gmsh_quad, split_quad_ear);
 }

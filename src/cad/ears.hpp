@@ -28,6 +28,7 @@
 #include <Eigen/Core>
 #include <functional>
 
+#include "hom/geometry/geometry_model.hpp"
 #include "hom/io/msh_data.hpp"
 
 namespace hom::cad {
@@ -41,6 +42,11 @@ struct FaceGeometry {
   /// Empty: corners where two curves meet are never ears.
   std::function<Eigen::Vector3d(int curve, const Eigen::Vector3d& x)> curve_tangent = {};
 };
+
+/// The FaceGeometry of a CAD model's geometry (projection and evaluation on
+/// its surfaces, tangents of its curves). It refers to `geometry`, which
+/// must outlive it.
+FaceGeometry face_geometry(const GeometryModel<3>& geometry);
 
 /// Splits every ear (see above) among the 4-node quadrilaterals of `d` (Gmsh
 /// type 3, on face entities; their boundary edges are the 2-node lines, type

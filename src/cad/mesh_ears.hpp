@@ -50,8 +50,7 @@ inline std::vector<std::set<int>> node_curves(const io::MshData& d, const CadMod
 /// Gmsh's meshes. Returns the number of ears split; the mesh is replaced
 /// only when there were some, and its new nodes (one per triangle ear, four
 /// per quadrilateral ear, on the ear's face) must then be classified again
-/// (classify). Planar meshes get theirs split by the curving pipeline
-/// (hom/mesh/flat_corners.hpp).
+/// (classify). Planar meshes: see the overload below.
 template <ElementFamily Family, NodeSet Nodes>
 int split_mesh_ears(Mesh<Family, Nodes, 3>& mesh, const CadModel& cad) {
   static_assert(Family::dim == 2 || Family::is_simplex, "hom::cad::split_mesh_ears: tetrahedra, triangles or quads");
@@ -97,12 +96,7 @@ int split_mesh_ears(Mesh<Family, Nodes, 3>& mesh, const CadModel& cad) {
     d.element_nodes.push_back(edge.second);
     d.elements.push_back(line);
   }
-  const FaceGeometry faces{[&](int f, const Eigen::Vector3d& x) { return geometry.surface(f)->project(x); },
-                           [&](int f, const Eigen::Vector2d& uv) { return geometry.surface(f)->evaluate(uv); },
-                           [&](int c, const Eigen::Vector3d& x) -> Eigen::Vector3d {
-                             const auto* g = geometry.curve(c);
-                             return g ? g->derivative(g->project(x)) : Eigen::Vector3d::Zero();
-                           }};
+  const FaceGeometry faces = face_geometry(geometry);
   const int ears = Family::is_simplex ? split_triangle_ears(d, faces) : split_quad_ears(d, faces);
   if (ears == 0) return 0;
   std::erase_if(d.elements, [&](const io::MshElement& e) {
@@ -110,6 +104,34 @@ int split_mesh_ears(Mesh<Family, Nodes, 3>& mesh, const CadModel& cad) {
   });
   mesh = io::to_mesh<Family, Nodes, 3>(d);
   return ears;
+}
+
+/// The same for a planar mesh (in z = 0, classified as a surface mesh of the
+/// model's planar faces, as hom::tools::classify_user_mesh does): the ears
+/// of quadrilaterals are split in the plane, as Gmsh's planar quads get
+/// theirs in cad_mesh_data. Planar triangles are left (returns 0): the
+/// curving pipeline splits their flat corners (hom/mesh/flat_corners.hpp).
+template <ElementFamily Family, NodeSet Nodes>
+int split_mesh_ears(Mesh<Family, Nodes, 2>& mesh, const CadModel& cad) {
+  static_assert(Family::dim == 2, "hom::cad::split_mesh_ears: a planar mesh holds triangles or quadrilaterals");
+  if constexpr (Family::is_simplex) {
+    return 0;
+  } else {
+    typename Mesh<Family, Nodes, 3>::Coordinates lifted_nodes = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
+    lifted_nodes.topRows(2) = mesh.nodes();
+    Mesh<Family, Nodes, 3> lifted(mesh.degree(), lifted_nodes, mesh.elements());
+    lifted.node_classes() = mesh.node_classes();
+    lifted.element_entities() = mesh.element_entities();
+    lifted.entities() = mesh.entities();
+    const int ears = split_mesh_ears(lifted, cad);
+    if (ears == 0) return 0;
+    Mesh<Family, Nodes, 2> flat(lifted.degree(), lifted.nodes().topRows(2), lifted.elements());
+    flat.node_classes() = lifted.node_classes();
+    flat.element_entities() = lifted.element_entities();
+    flat.entities() = lifted.entities();
+    mesh = std::move(flat);
+    return ears;
+  }
 }
 
 }  // namespace hom::cad

@@ -416,7 +416,7 @@ int run(int argc, char** argv) {
           throw hom::tools::UsageError("curve: --bl-first needs a linear tetrahedral --mesh; " + o.mesh + " holds " +
                                        std::string(F::name) + " of degree " + std::to_string(mesh.degree()));
         hom::tools::classify_user_mesh(mesh, cad, o.tolerance * cad.size());
-        if constexpr (M::space_dim == 3) split_ears_of_user_mesh(mesh, cad, o.tolerance * cad.size());
+        split_ears_of_user_mesh(mesh, cad, o.tolerance * cad.size());
         if constexpr (M::dim == 3)
           if (o.bl_first > 0.0) return hom::tools::boundary_layer_and_write(cad, mesh, boundary_layer_options(o), co);
         return hom::tools::curve_and_write(cad, mesh, co, elapsed());
