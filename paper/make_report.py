@@ -119,6 +119,10 @@ FULL = [
          args=["--p", "10", "--peer", "gmsh", "--peer-mode", "2,3,4", "--peer-timeout", "1800", "--no-vtu",
                "--no-cut"], timeout=4 * 3600, role="peer",
          conditions="the perturbed cube at p = 10 through hom once and Gmsh's modes 2, 3 and 4"),
+    dict(name="untangle_p10_unperturbed_peer_modes", binary="bench_untangle",
+         args=["--p", "10", "--perturb", "0", "--peer", "gmsh", "--peer-mode", "1,2,3,4", "--peer-timeout", "1800",
+               "--no-vtu", "--no-cut"], timeout=4 * 3600, role="peer",
+         conditions="the unperturbed cube at p = 10 through hom once and Gmsh's modes 1 to 4"),
     dict(name="untangle_newton", binary="bench_untangle", args=["--p", "5", "--solver", "newton", "--no-vtu", "--no-cut"],
          role="solver"),
     dict(name="untangle_gs", binary="bench_untangle", args=["--p", "5", "--solver", "gauss-seidel", "--no-vtu", "--no-cut"],
@@ -1029,7 +1033,7 @@ def peer_section(reports, runs):
     out = ["## Peer comparison: Gmsh 4.8.4 on identical inputs", ""]
     keyed = []
     runs_with_peer = (["untangle", "untangle_unperturbed_peer"] + ["untangle_peer_mode%d" % m for m in (2, 3, 4)] +
-                      ["untangle_p10_peer_modes"])
+                      ["untangle_p10_peer_modes", "untangle_p10_unperturbed_peer_modes"])
     for run in runs_with_peer:
         init = {}
         input_name = "unperturbed" if "unperturbed" in run else "perturbed"
