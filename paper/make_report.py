@@ -967,7 +967,16 @@ def peer_cells(case, initial, peer):
             num(case.get("min_q"), 3), num(peer.get("min_q"), 3), num(case.get("mean_q"), 3),
             num(peer.get("mean_q"), 3), num(case.get("min_scaled_jacobian"), 3),
             num(peer.get("min_scaled_jacobian"), 3), num(case.get("time_s"), 1), num(peer.get("time_s"), 1),
-            r if peer.get("status") == "ok" else "> %s (%s)" % (r, peer.get("status"))]
+            time_ratio_cell(r, peer.get("status"))]
+
+
+def time_ratio_cell(r, status):
+    """A peer's time ratio: a lower bound where Gmsh ran out of time, none where it crashed or failed."""
+    if status == "ok":
+        return r
+    if status == "timeout":
+        return "> %s (timeout)" % r
+    return "- (%s)" % status
 
 
 def peer_verdicts(rows, first, mode):
@@ -980,6 +989,8 @@ def peer_verdicts(rows, first, mode):
              ("**hom leaves inverted elements** for: %s.", lambda c: c[1] not in ("0", "-")),
              ("**hom's result folds at a node** (min scaled Jacobian <= 0, no quadrature point inverted) for: %s.",
               lambda c: c[1] == "0" and c[7] != "-" and float(c[7]) <= 0),
+             ("Gmsh gives no mesh (it ran out of time, crashed or failed) for: %s.",
+              lambda c: c[11].startswith(("> ", "- ("))),
              ("**hom is slower than Gmsh** (where Gmsh leaves no element inverted) for: %s.",
               lambda c: c[2] == "0" and re.match(r"^[0-9.]+$", c[11]) and float(c[11]) < 1)]
     out = []
