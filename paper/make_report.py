@@ -1060,7 +1060,8 @@ def peer_section(reports, runs):
                               [num(c.get("peak_rss_mb"), 0), num(peer.get("peak_rss_mb"), 0)]))
     rows = [row for _, row in sorted(keyed, key=lambda kr: kr[0])]
     if rows:
-        out += ["Untangling (table 4.1's pipeline): the same perturbed mesh through hom and through Gmsh's high-order "
+        out += ["Untangling (table 4.1's pipeline): the same curved mesh, randomly perturbed or not (the case says), "
+                "through hom (its default solver, without p-continuation) and through Gmsh's high-order "
                 "optimizer (Mesh.HighOrderOptimize, child process), both judged by hom's shape quality. hom's peak "
                 "memory is the whole harness process's. Gmsh's modes: 1 optimization, 2 elastic analogy then "
                 "optimization, 3 elastic analogy, 4 fast curving. Its optimization works on patches around the elements whose scaled "
