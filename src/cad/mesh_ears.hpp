@@ -50,86 +50,66 @@ inline std::vector<std::set<int>> node_curves(const io::MshData& d, const CadMod
 /// Gmsh's meshes. Returns the number of ears split; the mesh is replaced
 /// only when there were some, and its new nodes (one per triangle ear, four
 /// per quadrilateral ear, on the ear's face) must then be classified again
-/// (classify). Planar meshes: see the overload below.
-template <ElementFamily Family, NodeSet Nodes>
-int split_mesh_ears(Mesh<Family, Nodes, 3>& mesh, const CadModel& cad) {
+/// (classify). A planar mesh (SpaceDim = 2, in z = 0 as MSH data holds it)
+/// gets its quadrilaterals' ears split in the plane, as Gmsh's planar quads
+/// get theirs in cad_mesh_data; its triangles are left (returns 0): the
+/// curving pipeline splits their flat corners (hom/mesh/flat_corners.hpp).
+template <ElementFamily Family, NodeSet Nodes, int SpaceDim>
+int split_mesh_ears(Mesh<Family, Nodes, SpaceDim>& mesh, const CadModel& cad) {
   static_assert(Family::dim == 2 || Family::is_simplex, "hom::cad::split_mesh_ears: tetrahedra, triangles or quads");
-  if (mesh.degree() != 1) return 0;
-  constexpr int gmsh_line = 1, gmsh_triangle = 2, gmsh_quad = 3;
-  io::MshData d = io::to_msh_data(mesh);  // node tags: mesh index + 1
-  const auto curves = detail::node_curves(d, cad);
-  const auto geometry = cad.geometry_model();
-  auto point = [&](std::int64_t tag) {
-    const auto& x = d.nodes[tag - 1].x;
-    return Eigen::Vector3d(x[0], x[1], x[2]);
-  };
-  // The curve of each edge of the 2D elements (facets of a volume mesh).
-  std::map<std::pair<std::int64_t, std::int64_t>, int> on_curve;
-  for (const auto& e : d.elements) {
-    if (e.type != gmsh_triangle && e.type != gmsh_quad) continue;
-    const auto n = d.nodes_of(e);
-    for (std::size_t k = 0; k < n.size(); ++k) {
-      const std::int64_t a = std::min(n[k], n[(k + 1) % n.size()]), b = std::max(n[k], n[(k + 1) % n.size()]);
-      if (on_curve.count({a, b})) continue;
-      const Eigen::Vector3d mid = 0.5 * (point(a) + point(b));
-      const double length = (point(b) - point(a)).norm();
-      for (int c : curves[a - 1]) {
-        if (!curves[b - 1].count(c)) continue;
-        const auto* g = geometry.curve(c);
-        if (g && (g->evaluate(g->project(mid)) - mid).norm() <= 0.25 * length) {
-          on_curve[{a, b}] = c;
-          break;
+  static_assert(SpaceDim == 3 || Family::dim == 2, "hom::cad::split_mesh_ears: a planar mesh of triangles or quads");
+  if constexpr (SpaceDim == 2 && Family::is_simplex) {
+    return 0;
+  } else {
+    if (mesh.degree() != 1) return 0;
+    constexpr int gmsh_line = 1, gmsh_triangle = 2, gmsh_quad = 3;
+    io::MshData d = io::to_msh_data(mesh);  // node tags: mesh index + 1; z = 0 for a planar mesh
+    const auto curves = detail::node_curves(d, cad);
+    const auto geometry = cad.geometry_model();
+    auto point = [&](std::int64_t tag) {
+      const auto& x = d.nodes[tag - 1].x;
+      return Eigen::Vector3d(x[0], x[1], x[2]);
+    };
+    // The curve of each edge of the 2D elements (facets of a volume mesh).
+    std::map<std::pair<std::int64_t, std::int64_t>, int> on_curve;
+    for (const auto& e : d.elements) {
+      if (e.type != gmsh_triangle && e.type != gmsh_quad) continue;
+      const auto n = d.nodes_of(e);
+      for (std::size_t k = 0; k < n.size(); ++k) {
+        const std::int64_t a = std::min(n[k], n[(k + 1) % n.size()]), b = std::max(n[k], n[(k + 1) % n.size()]);
+        if (on_curve.count({a, b})) continue;
+        const Eigen::Vector3d mid = 0.5 * (point(a) + point(b));
+        const double length = (point(b) - point(a)).norm();
+        for (int c : curves[a - 1]) {
+          if (!curves[b - 1].count(c)) continue;
+          const auto* g = geometry.curve(c);
+          if (g && (g->evaluate(g->project(mid)) - mid).norm() <= 0.25 * length) {
+            on_curve[{a, b}] = c;
+            break;
+          }
         }
       }
     }
-  }
-  const std::int64_t first_line = d.elements.empty() ? 1 : d.elements.back().tag + 1;
-  std::int64_t tag = first_line;
-  for (const auto& [edge, c] : on_curve) {
-    io::MshElement line;
-    line.tag = tag++;
-    line.type = gmsh_line;
-    line.entity = EntityId{1, c};
-    line.first = d.element_nodes.size();
-    line.num_nodes = 2;
-    d.element_nodes.push_back(edge.first);
-    d.element_nodes.push_back(edge.second);
-    d.elements.push_back(line);
-  }
-  const FaceGeometry faces = face_geometry(geometry);
-  const int ears = Family::is_simplex ? split_triangle_ears(d, faces) : split_quad_ears(d, faces);
-  if (ears == 0) return 0;
-  std::erase_if(d.elements, [&](const io::MshElement& e) {
-    return e.type == gmsh_line && e.entity.dim == 1 && e.tag >= first_line && e.tag < tag;
-  });
-  mesh = io::to_mesh<Family, Nodes, 3>(d);
-  return ears;
-}
-
-/// The same for a planar mesh (in z = 0, classified as a surface mesh of the
-/// model's planar faces, as hom::tools::classify_user_mesh does): the ears
-/// of quadrilaterals are split in the plane, as Gmsh's planar quads get
-/// theirs in cad_mesh_data. Planar triangles are left (returns 0): the
-/// curving pipeline splits their flat corners (hom/mesh/flat_corners.hpp).
-template <ElementFamily Family, NodeSet Nodes>
-int split_mesh_ears(Mesh<Family, Nodes, 2>& mesh, const CadModel& cad) {
-  static_assert(Family::dim == 2, "hom::cad::split_mesh_ears: a planar mesh holds triangles or quadrilaterals");
-  if constexpr (Family::is_simplex) {
-    return 0;
-  } else {
-    typename Mesh<Family, Nodes, 3>::Coordinates lifted_nodes = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
-    lifted_nodes.topRows(2) = mesh.nodes();
-    Mesh<Family, Nodes, 3> lifted(mesh.degree(), lifted_nodes, mesh.elements());
-    lifted.node_classes() = mesh.node_classes();
-    lifted.element_entities() = mesh.element_entities();
-    lifted.entities() = mesh.entities();
-    const int ears = split_mesh_ears(lifted, cad);
+    const std::int64_t first_line = d.elements.empty() ? 1 : d.elements.back().tag + 1;
+    std::int64_t tag = first_line;
+    for (const auto& [edge, c] : on_curve) {
+      io::MshElement line;
+      line.tag = tag++;
+      line.type = gmsh_line;
+      line.entity = EntityId{1, c};
+      line.first = d.element_nodes.size();
+      line.num_nodes = 2;
+      d.element_nodes.push_back(edge.first);
+      d.element_nodes.push_back(edge.second);
+      d.elements.push_back(line);
+    }
+    const FaceGeometry faces = face_geometry(geometry);
+    const int ears = Family::is_simplex ? split_triangle_ears(d, faces) : split_quad_ears(d, faces);
     if (ears == 0) return 0;
-    Mesh<Family, Nodes, 2> flat(lifted.degree(), lifted.nodes().topRows(2), lifted.elements());
-    flat.node_classes() = lifted.node_classes();
-    flat.element_entities() = lifted.element_entities();
-    flat.entities() = lifted.entities();
-    mesh = std::move(flat);
+    std::erase_if(d.elements, [&](const io::MshElement& e) {
+      return e.type == gmsh_line && e.entity.dim == 1 && e.tag >= first_line && e.tag < tag;
+    });
+    mesh = io::to_mesh<Family, Nodes, SpaceDim>(d);
     return ears;
   }
 }
