@@ -52,7 +52,11 @@
 /// splits such "ears" (src/cad/ears.hpp), and plate_quad's 708
 /// quadrilaterals are certified valid at p = 3 and 4. Surface triangle
 /// meshes get the same split, since 2026-12-04 (propeller_surface: 6 ears,
-/// 1420 triangles). With --certify, each
+/// 1420 triangles). --refine-invalid N: an invalid or uncertified result
+/// is curved again from the model meshed finer around its failing elements,
+/// up to N times, as `hom curve --refine-invalid` (src/curve/
+/// refine_invalid.hpp); each case's JSON says how many meshes it took
+/// ("mesh_tries"), and its statistics are the last mesh's. With --certify, each
 /// volume and planar result (tetrahedra, planar triangles and
 /// quadrilaterals) also goes through Gmsh's own validity analysis
 /// (src/meshing/gmsh_validity.hpp; --no-peer skips it), and the claim that
@@ -99,6 +103,7 @@
 #include "gmsh_peer_report.hpp"
 #include "gmsh_validity.hpp"
 #include "harness.hpp"
+#include "refine_invalid.hpp"
 #include "hom/io/report.hpp"
 #include "hom/io/vtu.hpp"
 #include "hom/measure/shape_measure.hpp"
@@ -144,6 +149,7 @@ struct Settings {
   std::string optimizer_peer = "none";  ///< --optimizer-peer: none | gmsh (tetrahedral cases)
   double peer_timeout = 1800;           ///< --peer-timeout, seconds per Gmsh run
   std::vector<int> peer_modes = {1};    ///< --peer-mode: Mesh.HighOrderOptimize, one run per mode
+  int refine_invalid = 0;  ///< --refine-invalid: tries after the first, each meshing finer around failing elements
 };
 
 const char* kind_name(Kind k) {
@@ -210,10 +216,10 @@ class Runner {
   void curve_all(const Case& c, const hom::cad::CadModel& cad, const hom::cad::CadMeshOptions& mo,
                  const std::vector<int>& degrees) {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
-    const double t_mesh = hom::bench::seconds_since(t0);
-    std::printf("   linear mesh: %d elements, %d nodes (Gmsh, %.2f s)\n", linear.num_elements(), linear.num_nodes(),
-                t_mesh);
+    const auto first_linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
+    const double t_first_mesh = hom::bench::seconds_since(t0);
+    std::printf("   linear mesh: %d elements, %d nodes (Gmsh, %.2f s)\n", first_linear.num_elements(),
+                first_linear.num_nodes(), t_first_mesh);
     for (int p : degrees) {
       hom::cad::CurveOptions o;
       o.p = p;
@@ -221,8 +227,11 @@ class Runner {
       o.iterations_after_valid = s_.iterations_after_valid;
       o.certify = s_.certify;
       try {
+        auto linear = first_linear;
+        double t_mesh = t_first_mesh;
         auto r = hom::cad::curve_mesh<F, S>(cad, linear, o);
-        report(c, cad, std::string(F::name), p, r.stages, t_mesh);
+        const int tries = refine_invalid<F, S>(cad, mo, o, linear, t_mesh, r);
+        report(c, cad, std::string(F::name), p, r.stages, t_mesh, tries);
         int corners = 0;
         for (double sj : r.element_scaled_jacobian) corners += !(sj > 0.0);
         if (corners > 0) std::printf("   %d elements with det <= 0 at a node\n", corners);
@@ -256,6 +265,34 @@ class Runner {
         checks_.expect(false, c.name + " p = " + std::to_string(p) + ": " + e.what());
       }
     }
+  }
+
+  /// --refine-invalid N: while `r` is invalid and tries are left, the model is
+  /// meshed again finer around its failing elements (balls of the earlier
+  /// tries kept; src/curve/refine_invalid.hpp) and curved again, as hom
+  /// curve --refine-invalid does. `linear`, `t_mesh` and `r` become the last
+  /// try's. Returns the number of tries (1: the first mesh).
+  template <hom::ElementFamily F, int S>
+  int refine_invalid(const hom::cad::CadModel& cad, hom::cad::CadMeshOptions mo, const hom::cad::CurveOptions& o,
+                     hom::cad::CurvedMesh<F, S>& linear, double& t_mesh,
+                     hom::cad::CurveResult<hom::cad::CurvedMesh<F, S>>& r) {
+    int tries = 1;
+    for (; tries <= s_.refine_invalid; ++tries) {
+      const auto failing = hom::cad::failing_elements(r);
+      if (failing.elements.empty()) break;
+      const auto balls = hom::cad::balls_around(r.mesh, failing.elements);
+      mo.local_sizes.insert(mo.local_sizes.end(), balls.begin(), balls.end());
+      const auto t0 = std::chrono::steady_clock::now();
+      linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
+      t_mesh = hom::bench::seconds_since(t0);
+      std::printf("   p = %d: %d elements fail; try %d: the model meshed again finer around them (size floor %.3g), "
+                  "%d elements, %d nodes (Gmsh, %.2f s)\n",
+                  o.p, int(failing.elements.size()), tries + 1, hom::cad::size_floor(mo), linear.num_elements(),
+                  linear.num_nodes(), t_mesh);
+      std::fflush(stdout);
+      r = hom::cad::curve_mesh<F, S>(cad, linear, o);
+    }
+    return tries;
   }
 
   /// Issue 8's cross-check on the CAD cases: Gmsh's Plugin(AnalyseMeshQuality)
@@ -318,7 +355,7 @@ class Runner {
   }
 
   void report(const Case& c, const hom::cad::CadModel& cad, const std::string& family, int p,
-              const std::vector<hom::cad::StageReport>& stages, double t_mesh) {
+              const std::vector<hom::cad::StageReport>& stages, double t_mesh, int mesh_tries) {
     const double rss = hom::bench::peak_rss_mb();
     std::printf("   p = %d\n   %-8s %-10s %8s %8s %6s %6s %6s %5s %7s %8s   %s\n", p, "part", "stage", "elements",
                 "nodes", "Min", "Max", "Mean", "#inv", "min SJ", "time s", "thesis (Min Mean #inv [min SJ])");
@@ -347,7 +384,8 @@ class Runner {
           .set("time_s", t)
           .set("iterations", s.iterations)
           .set("peak_rss_mb", rss)
-          .set("threads", s_.threads);
+          .set("threads", s_.threads)
+          .set("mesh_tries", mesh_tries);
       if (!s.solver.empty()) j.set("solver", s.solver).set("stop_reason", s.stop_reason);
       if (th) {
         auto t_json = hom::io::Json::object();
@@ -536,7 +574,10 @@ int main(int argc, char** argv) {
        "wall-clock limit of each Gmsh run, seconds")  //
       ("peer-mode", po::value(&peer_modes)->default_value("1"),
        "Mesh.HighOrderOptimize: 1 optimization, 2 elastic + optimization, 3 elastic, 4 fast curving; a list "
-       "(2,3,4) runs each mode from the same initial mesh");
+       "(2,3,4) runs each mode from the same initial mesh")  //
+      ("refine-invalid", po::value(&s.refine_invalid)->default_value(0),
+       "if a result is invalid or uncertified, mesh the model again finer around the failing elements and curve "
+       "again, up to N times (as hom curve --refine-invalid; 0: off)");
   std::vector<int> forced;
   try {
     po::variables_map vm;
@@ -550,6 +591,7 @@ int main(int argc, char** argv) {
     s.gmsh_peer = !no_peer;
     if (s.optimizer_peer != "none" && s.optimizer_peer != "gmsh")
       throw std::invalid_argument("--optimizer-peer: expected none or gmsh, got '" + s.optimizer_peer + "'");
+    if (s.refine_invalid < 0) throw std::invalid_argument("--refine-invalid must be >= 0");
     if (!(s.peer_timeout > 0)) throw std::invalid_argument("--peer-timeout must be positive");
     s.peer_modes = hom::bench::parse_peer_modes(peer_modes);
     if (!degrees.empty()) forced = hom::bench::parse_int_list(degrees, "--p", 2, 15);

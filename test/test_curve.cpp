@@ -18,6 +18,7 @@
 #include "cad_mesher.hpp"
 #include "curve_mesh.hpp"
 #include "curve_models.hpp"
+#include "refine_invalid.hpp"
 #include "hom/measure/shape_measure.hpp"
 #include "hom/mesh/facet.hpp"
 #include "hom/mesh/flat_corners.hpp"
@@ -289,6 +290,57 @@ TEST_CASE("certify: the planar pipeline's certificate is the result's, and decid
   CHECK(again.min_scaled_jacobian == doctest::Approx(c.min_scaled_jacobian));
   CHECK(r.valid == (r.inverted == 0 && r.conformity.ok && c.certified()));
   check_nodes_on_cad(r.mesh, m, 1e-10 * m.size());
+}
+
+TEST_CASE("refine_invalid: the failing elements by the first reason that applies, a ball around each") {
+  const auto m = cad::plate_with_holes_model();
+  cad::CadMeshOptions mo;
+  mo.size = 0.9;
+  const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+  const auto valid = cad::curve_mesh<Simplex<2>, 2>(m, linear, options(2));
+  REQUIRE(valid.valid);
+  REQUIRE(cad::count_folded_at_nodes(valid) == 0);
+  CHECK(cad::failing_elements(valid).why == cad::Failure::none);
+  CHECK(cad::failing_elements(valid).elements.empty());
+  const int n = valid.mesh.num_elements();
+  REQUIRE(n > 10);
+
+  auto r = valid;  // a fold at a node of element 5 only: no quadrature point sees it
+  r.element_scaled_jacobian[5] = -0.1;
+  CHECK(cad::folded_at_node(r, 5));
+  CHECK(cad::failing_elements(r).why == cad::Failure::folded_at_node);
+  CHECK(cad::failing_elements(r).elements == std::vector<int>{5});
+  r.certification.emplace();  // certified: elements 2 and 7 not
+  r.certification->invalid = 2;
+  r.certification->uncertified = {2, 7};
+  r.valid = false;
+  CHECK(cad::failing_elements(r).why == cad::Failure::uncertified);
+  CHECK(cad::failing_elements(r).elements == std::vector<int>{2, 7});
+  r.conformity.ok = false;  // a node off the CAD comes first, and blames no element
+  CHECK(cad::failing_elements(r).why == cad::Failure::off_cad);
+  CHECK(cad::failing_elements(r).elements.empty());
+  r.inverted = 2;  // inverted at quadrature points comes before everything
+  r.element_valid[n - 1] = false;
+  r.element_valid[3] = false;
+  CHECK(cad::failing_elements(r).why == cad::Failure::inverted);
+  CHECK(cad::failing_elements(r).elements == std::vector<int>{3, n - 1});
+
+  const auto balls = cad::balls_around(valid.mesh, {3, n - 1});
+  REQUIRE(balls.size() == 2);
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::MatrixXd x = valid.mesh.element_coordinates(k == 0 ? 3 : n - 1);
+    const Eigen::Vector2d centroid = x.rowwise().mean();
+    CHECK((balls[k].center.head<2>() - centroid).norm() < 1e-12);
+    CHECK(balls[k].center.z() == 0.0);
+    double width = 0.0, reach = 0.0;  // widest pair of nodes; farthest node from the centroid
+    for (int i = 0; i < int(x.cols()); ++i) {
+      reach = std::max(reach, (x.col(i) - centroid).norm());
+      for (int j = 0; j < int(x.cols()); ++j) width = std::max(width, (x.col(i) - x.col(j)).norm());
+    }
+    CHECK(balls[k].radius == doctest::Approx(width));
+    CHECK(balls[k].radius >= reach);  // the ball holds the whole element
+    CHECK(balls[k].size == doctest::Approx(width / 2));
+  }
 }
 
 // Two nodes on one face whose parameters are within a tenth of the face's

@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +18,7 @@
 #include "cad_mesher.hpp"
 #include "cad_model.hpp"
 #include "curve_mesh.hpp"
+#include "refine_invalid.hpp"
 #include "hom/io/certification_report.hpp"
 #include "hom/io/report.hpp"
 #include "mesh_io.hpp"
@@ -57,18 +57,16 @@ inline double peak_rss_mb() {
 }
 
 /// Names the failing elements of an invalid result so that a user can find
-/// them: up to `limit` of the elements `failing(e)` picks, each with its index
-/// in the mesh (the linear mesh's element order), centroid, quality, scaled
-/// Jacobian and where its nodes are: interior nodes move freely, nodes on a
-/// CAD face slide on it, nodes on CAD edges and vertices stay (a fold that
-/// only held nodes determine cannot be undone).
-template <class MeshT, class Pred>
-void print_failing_elements(const cad::CurveResult<MeshT>& r, Pred failing, int limit = 5) {
-  int listed = 0, total = 0;
-  for (int e = 0; e < r.mesh.num_elements(); ++e) {
-    if (!failing(e)) continue;
-    if (++total > limit) continue;
-    ++listed;
+/// them: up to `limit` of `elements`, each with its index in the mesh (the
+/// linear mesh's element order), centroid, quality, scaled Jacobian and where
+/// its nodes are: interior nodes move freely, nodes on a CAD face slide on it,
+/// nodes on CAD edges and vertices stay (a fold that only held nodes
+/// determine cannot be undone).
+template <class MeshT>
+void print_failing_elements(const cad::CurveResult<MeshT>& r, const std::vector<int>& elements, int limit = 5) {
+  const int listed = std::min(limit, int(elements.size()));
+  for (int i = 0; i < listed; ++i) {
+    const int e = elements[i];
     const auto x = r.mesh.element_coordinates(e);
     const Eigen::VectorXd c = x.rowwise().mean();
     int interior = 0, on_faces = 0;
@@ -84,29 +82,7 @@ void print_failing_elements(const cad::CurveResult<MeshT>& r, Pred failing, int 
                  r.element_quality[e], r.element_scaled_jacobian[e], int(nodes.size()), interior, on_faces,
                  int(nodes.size()) - interior - on_faces);
   }
-  if (total > listed) std::fprintf(stderr, "  ... and %d more\n", total - listed);
-}
-
-/// Balls around the elements `failing(e)` picks, where the model is meshed
-/// again finer (hom curve --refine-invalid): each centred at its element's
-/// centroid, as wide as the element (the largest distance between two of its
-/// nodes), the size inside half that width.
-template <class MeshT, class Pred>
-std::vector<cad::LocalSize> balls_around(const MeshT& mesh, Pred failing) {
-  std::vector<cad::LocalSize> balls;
-  for (int e = 0; e < mesh.num_elements(); ++e) {
-    if (!failing(e)) continue;
-    const auto x = mesh.element_coordinates(e);
-    double width = 0.0;
-    for (int i = 0; i < int(x.cols()); ++i)
-      for (int j = i + 1; j < int(x.cols()); ++j) width = std::max(width, (x.col(i) - x.col(j)).norm());
-    cad::LocalSize ball;
-    ball.center.head(x.rows()) = x.rowwise().mean();
-    ball.radius = width;
-    ball.size = width / 2;
-    balls.push_back(ball);
-  }
-  return balls;
+  if (int(elements.size()) > listed) std::fprintf(stderr, "  ... and %d more\n", int(elements.size()) - listed);
 }
 
 inline void print_stage_table(const std::vector<cad::StageReport>& stages) {
@@ -183,45 +159,39 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   // value there is a fold that no quadrature point sees (typically an element
   // corner on a curved boundary opened beyond 180 degrees); a zero one a
   // corner of 180 degrees or, on a surface, a pole (allowed there).
-  auto folded_at_a_node = [&](int e) {
-    const double sj = r.element_scaled_jacobian[e];
-    return S == MeshT::dim ? !(sj > 0.0) : !(sj >= 0.0);
-  };
-  int folded_at_nodes = 0;
-  for (int e = 0; e < int(r.element_scaled_jacobian.size()); ++e) folded_at_nodes += folded_at_a_node(e);
+  const int folded_at_nodes = cad::count_folded_at_nodes(r);
+  const cad::FailingElements failing = cad::failing_elements(r);
   print_stage_table(r.stages);
   const double rss = peak_rss_mb();
   std::printf("boundary on the CAD: %d nodes checked, largest distance %.3g\n", r.conformity.checked,
               r.conformity.max_distance);
   if (r.certification) io::print_certification(*r.certification, co.certify_depth);
-  const bool uncertified = r.certification && !r.certification->certified();
-  const bool valid = r.valid && folded_at_nodes == 0;
+  const bool valid = failing.why == cad::Failure::none;
   const char* cmd = o.command.c_str();
   if (!valid) {
-    std::function<bool(int)> failing = [](int) { return false; };  // a boundary node off the CAD: no element
-    if (r.inverted > 0) {
-      std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; no mesh written\n",
-                   cmd, r.inverted, r.mesh.num_elements());
-      failing = [&](int e) { return !r.element_valid[e]; };
-    } else if (!r.conformity.ok)
-      std::fprintf(stderr, "hom: %s: INVALID result: %s; no mesh written\n", cmd, r.conformity.problem.c_str());
-    else if (uncertified) {
-      const auto& listed = r.certification->uncertified;  // ascending
-      std::fprintf(stderr,
-                   "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish between "
-                   "quadrature points); no mesh written\n",
-                   cmd, int(listed.size()), r.mesh.num_elements());
-      failing = [&](int e) { return std::binary_search(listed.begin(), listed.end(), e); };
+    const int n = int(failing.elements.size());
+    switch (failing.why) {
+      case cad::Failure::inverted:
+        std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; no mesh "
+                     "written\n", cmd, n, r.mesh.num_elements());
+        break;
+      case cad::Failure::off_cad:
+        std::fprintf(stderr, "hom: %s: INVALID result: %s; no mesh written\n", cmd, r.conformity.problem.c_str());
+        break;
+      case cad::Failure::uncertified:
+        std::fprintf(stderr,
+                     "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish "
+                     "between quadrature points); no mesh written\n",
+                     cmd, n, r.mesh.num_elements());
+        break;
+      default:
+        std::fprintf(stderr,
+                     "hom: %s: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points "
+                     "are valid: a fold at an element corner); no mesh written\n",
+                     cmd, n);
     }
-    else {
-      std::fprintf(stderr,
-                   "hom: %s: INVALID result: %d elements have det D phi <= 0 at a node (their quadrature points are "
-                   "valid: a fold at an element corner); no mesh written\n",
-                   cmd, folded_at_nodes);
-      failing = folded_at_a_node;
-    }
-    print_failing_elements(r, failing);
-    if (retry && !(*retry = balls_around(r.mesh, failing)).empty()) return 3;
+    print_failing_elements(r, failing.elements);
+    if (retry && !(*retry = cad::balls_around(r.mesh, failing.elements)).empty()) return 3;
   } else {
     std::printf("valid: every element valid at every quadrature point and node%s, every boundary node on its CAD entity\n",
                 r.certification ? " and certified valid everywhere" : "");
@@ -263,7 +233,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
     std::vector<double> inverted, folded, uncertified(r.element_valid.size(), 0.0);
     for (int e = 0; e < int(r.element_valid.size()); ++e) {
       inverted.push_back(r.element_valid[e] ? 0.0 : 1.0);
-      folded.push_back(folded_at_a_node(e) ? 1.0 : 0.0);
+      folded.push_back(cad::folded_at_node(r, e) ? 1.0 : 0.0);
     }
     if (r.certification)
       for (int e : r.certification->uncertified) uncertified[e] = 1.0;

@@ -1,0 +1,97 @@
+#pragma once
+/// @file refine_invalid.hpp
+/// What to do with a curved mesh that came out invalid (hom curve
+/// --refine-invalid, bench_curve --refine-invalid): name the elements to blame
+/// and put a ball of finer size around each, where the model is meshed again
+/// (CadMeshOptions::local_sizes, Gmsh's Ball fields).
+///
+/// A linear element larger than a feature of the CAD it touches (a leading
+/// edge, a fillet, a wing root's fairing) may admit no valid curved position
+/// with its boundary nodes on the CAD, whatever its free nodes do; smaller
+/// elements there can follow the feature. The thesis's meshes of section 6.3
+/// are sized to their geometry beforehand; this sizes them after the fact,
+/// only where the curving failed.
+
+#include <algorithm>
+#include <vector>
+
+#include "cad_mesher.hpp"
+#include "curve_mesh.hpp"
+
+namespace hom::cad {
+
+/// Why a curve_mesh result is invalid (the first reason that applies).
+enum class Failure {
+  none,            ///< valid
+  inverted,        ///< det D phi <= 0 at a quadrature point of some element
+  off_cad,         ///< a boundary node off its CAD entity: no element to blame
+  uncertified,     ///< CurveOptions::certify: some element not certified valid
+  folded_at_node,  ///< det D phi <= 0 at a node: a fold at an element corner that no quadrature point sees
+};
+
+struct FailingElements {
+  Failure why = Failure::none;
+  std::vector<int> elements;  ///< ascending
+};
+
+/// det D phi <= 0 at a node of element `e` (the result's scaled Jacobian there);
+/// on a surface only < 0, since a surface's normal may vanish at a pole.
+template <class MeshT>
+bool folded_at_node(const CurveResult<MeshT>& r, int e) {
+  const double sj = r.element_scaled_jacobian[e];
+  return MeshT::space_dim == MeshT::dim ? !(sj > 0.0) : !(sj >= 0.0);
+}
+
+template <class MeshT>
+int count_folded_at_nodes(const CurveResult<MeshT>& r) {
+  int n = 0;
+  for (int e = 0; e < int(r.element_scaled_jacobian.size()); ++e) n += folded_at_node(r, e);
+  return n;
+}
+
+/// The elements that make `r` invalid, and why.
+template <class MeshT>
+FailingElements failing_elements(const CurveResult<MeshT>& r) {
+  FailingElements f;
+  const int folded = count_folded_at_nodes(r);
+  if (r.valid && folded == 0) return f;
+  auto pick = [&](auto failing) {
+    for (int e = 0; e < r.mesh.num_elements(); ++e)
+      if (failing(e)) f.elements.push_back(e);
+  };
+  if (r.inverted > 0) {
+    f.why = Failure::inverted;
+    pick([&](int e) { return !r.element_valid[e]; });
+  } else if (!r.conformity.ok) {
+    f.why = Failure::off_cad;
+  } else if (r.certification && !r.certification->certified()) {
+    f.why = Failure::uncertified;
+    f.elements = r.certification->uncertified;  // ascending
+  } else {
+    f.why = Failure::folded_at_node;
+    pick([&](int e) { return folded_at_node(r, e); });
+  }
+  return f;
+}
+
+/// A ball around each of `elements`: centred at its centroid, as wide as the
+/// element (the largest distance between two of its nodes), the size inside
+/// half that width.
+template <class MeshT>
+std::vector<LocalSize> balls_around(const MeshT& mesh, const std::vector<int>& elements) {
+  std::vector<LocalSize> balls;
+  for (int e : elements) {
+    const auto x = mesh.element_coordinates(e);
+    double width = 0.0;
+    for (int i = 0; i < int(x.cols()); ++i)
+      for (int j = i + 1; j < int(x.cols()); ++j) width = std::max(width, (x.col(i) - x.col(j)).norm());
+    LocalSize ball;
+    ball.center.head(x.rows()) = x.rowwise().mean();
+    ball.radius = width;
+    ball.size = width / 2;
+    balls.push_back(ball);
+  }
+  return balls;
+}
+
+}  // namespace hom::cad
