@@ -32,6 +32,13 @@ namespace {
 
 constexpr double pi = std::numbers::pi;
 
+// The linear triangle mesh of a planar model (in z = 0) at a uniform size.
+cad::CurvedMesh<Simplex<2>, 2> planar_triangles(const cad::CadModel& m, double size) {
+  cad::CadMeshOptions mo;
+  mo.size = size;
+  return cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+}
+
 cad::CurveOptions options(int p) {
   cad::CurveOptions o;
   o.p = p;
@@ -268,9 +275,7 @@ TEST_CASE("optimize_on_cad: face nodes slid in (u, v) come back, stay on the sur
 
 TEST_CASE("certify: the planar pipeline's certificate is the result's, and decides validity") {
   const auto m = cad::plate_with_holes_model();
-  cad::CadMeshOptions mo;
-  mo.size = 0.9;
-  const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+  const auto linear = planar_triangles(m, 0.9);
   const auto plain = cad::curve_mesh<Simplex<2>, 2>(m, linear, options(4));
   CHECK_FALSE(plain.certification);
   auto o = options(4);
@@ -294,9 +299,7 @@ TEST_CASE("certify: the planar pipeline's certificate is the result's, and decid
 
 TEST_CASE("refine_invalid: the failing elements by the first reason that applies, a ball around each") {
   const auto m = cad::plate_with_holes_model();
-  cad::CadMeshOptions mo;
-  mo.size = 0.9;
-  const auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+  const auto linear = planar_triangles(m, 0.9);
   const auto valid = cad::curve_mesh<Simplex<2>, 2>(m, linear, options(2));
   REQUIRE(valid.valid);
   REQUIRE(cad::count_folded_at_nodes(valid) == 0);
@@ -407,9 +410,7 @@ TEST_CASE("certify: a surface element folded in its face's (u, v) is certified i
 
 TEST_CASE("a mesh that does not fit the model is an error naming what is wrong") {
   const auto m = cad::plate_with_holes_model();
-  cad::CadMeshOptions mo;
-  mo.size = 2.0;
-  auto linear = cad::mesh_cad<Simplex<2>, WarpBlend, 2>(m, mo);
+  auto linear = planar_triangles(m, 2.0);
   SUBCASE("an element on a face the model lacks") {
     linear.element_entities()[3] = 42;
     try {
