@@ -563,6 +563,63 @@ TEST_CASE("local sizes (CadMeshOptions::local_sizes): finer inside the ball, eve
   CHECK_THROWS_AS(cad::mesh_cad<Simplex<3>>(m, o), std::invalid_argument);
 }
 
+TEST_CASE("earlier sizes (CadMeshOptions::earlier_sizes): a ball below size_min refines only itself") {
+  // The cavity (radius 0.5 at the cube's centre) meshed by curvature at 24
+  // elements per turn asks for 0.13, below the floor 0.3: the floor decides.
+  const auto m = cad::cube_with_cavity_model();
+  const Eigen::Vector3d cavity(2.5, 2.5, 2.5);
+  cad::CadMeshOptions o;
+  o.size = 1.0;
+  o.size_min = 0.3;
+  o.size_from_curvature = 24;
+  const auto first = cad::mesh_cad<Simplex<3>>(m, o);
+  const Topology<Simplex<3>> topology(first);
+  const auto map = cad::size_map(first);
+  REQUIRE(map.points.size() == map.sizes.size());
+  REQUIRE(int(map.points.size()) == topology.num_vertices());
+  {  // the first vertex's size is the harmonic mean of its edges' lengths
+    const int v = topology.vertices().front();
+    double sum = 0;
+    int n = 0;
+    for (const auto& [a, b] : topology.edges())
+      if (a == v || b == v) sum += 1 / (first.node(a) - first.node(b)).norm(), ++n;
+    CHECK(map.sizes.front() == doctest::Approx(n / sum).epsilon(1e-12));
+    CHECK((map.points.front() - first.node(v)).norm() == 0.0);
+  }
+  // A ball of size 0.1 at the cube's face x = 5, 2 away from the cavity.
+  const Eigen::Vector3d centre(5.0, 2.5, 2.5);
+  o.local_sizes.push_back({centre, 0.6, 0.1});
+  // Without the earlier sizes Gmsh's floor falls to 0.1 for the whole model,
+  // so the cavity is meshed at its curvature's 0.13 as well (half as fine);
+  // with them, as the first mesh was.
+  const auto lowered = cad::mesh_cad<Simplex<3>>(m, o);
+  o.earlier_sizes = map;
+  const auto local = cad::mesh_cad<Simplex<3>>(m, o);
+  // The mean length of the edges with both ends within `r` of `x`.
+  auto mean_edge_near = [](const Mesh<Simplex<3>>& mesh, const Eigen::Vector3d& x, double r) {
+    double sum = 0;
+    int n = 0;
+    const Topology<Simplex<3>> t(mesh);
+    for (const auto& [a, b] : t.edges())
+      if ((mesh.node(a) - x).norm() < r && (mesh.node(b) - x).norm() < r)
+        sum += (mesh.node(a) - mesh.node(b)).norm(), ++n;
+    REQUIRE(n > 0);
+    return sum / n;
+  };
+  const double at_cavity = mean_edge_near(first, cavity, 0.6);
+  CHECK(mean_edge_near(lowered, cavity, 0.6) < 0.7 * at_cavity);
+  CHECK(mean_edge_near(local, cavity, 0.6) == doctest::Approx(at_cavity).epsilon(0.15));
+  CHECK(local.num_elements() < lowered.num_elements());
+  // Both refine the ball as it asks.
+  CHECK(mean_edge_near(local, centre, 0.3) < 0.2);
+  CHECK(mean_edge_near(lowered, centre, 0.3) < 0.2);
+  // A bad entry is named.
+  o.earlier_sizes.sizes[3] = std::nan("");
+  CHECK_THROWS_WITH_AS(cad::mesh_cad<Simplex<3>>(m, o), doctest::Contains("earlier size 4"), std::invalid_argument);
+  o.earlier_sizes.sizes.pop_back();
+  CHECK_THROWS_WITH_AS(cad::mesh_cad<Simplex<3>>(m, o), doctest::Contains("sizes"), std::invalid_argument);
+}
+
 TEST_CASE("check_size_fields names the first bad ball or vertex size") {
   const auto m = cad::cube_with_cavity_model();
   auto message = [&](const cad::CadMeshOptions& o) -> std::string {

@@ -7,11 +7,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <set>
 #include <sstream>
 #include <tuple>
+#include <utility>
+#include <boost/geometry/geometries/box.hpp>
+#include <boost/geometry/geometries/point.hpp>
+#include <boost/geometry/strategies/strategies.hpp>
+#include <boost/geometry/index/rtree.hpp>
 
 #include <BRepBndLib.hxx>
 #include <Bnd_Box.hxx>
@@ -271,6 +278,87 @@ void add_local_sizes(const std::vector<LocalSize>& balls, double scale, double m
   field::setAsBackgroundMesh(smallest);
 }
 
+// An earlier mesh's size at a point (CadMeshOptions::earlier_sizes): the
+// mean of the sizes at its vertices within r = 2 d + h of the point, weighted
+// by (1 - distance / r)^2, d the distance to the nearest vertex and h the
+// smallest size. The size is continuous: a vertex enters or leaves the mean
+// with weight 0. (The nearest vertex's size alone jumps between vertices,
+// and Gmsh's integration of 1 / size along a curve then subdivides without
+// end at the jumps: t106_turbine_cascade.step's curves filled 3 GB.)
+class EarlierSize {
+ public:
+  explicit EarlierSize(const SizeMap& map)
+      : sizes_(map.sizes), smallest_(*std::min_element(map.sizes.begin(), map.sizes.end())) {
+    std::vector<Entry> entries;
+    for (std::size_t i = 0; i < map.points.size(); ++i) entries.emplace_back(point(map.points[i]), i);
+    tree_ = Tree(entries.begin(), entries.end());  // bulk loading
+  }
+  double operator()(const Eigen::Vector3d& x) const {
+    namespace bgi = boost::geometry::index;
+    std::vector<Entry> near;
+    tree_.query(bgi::nearest(point(x), 1), std::back_inserter(near));
+    const double r = 2 * (point_of(near.front()) - x).norm() + smallest_;
+    near.clear();
+    const Eigen::Vector3d reach = Eigen::Vector3d::Constant(r);
+    tree_.query(bgi::intersects(Box(point(x - reach), point(x + reach))), std::back_inserter(near));
+    double weights = 0, sum = 0;
+    for (const auto& entry : near) {
+      const double d = (point_of(entry) - x).norm();
+      if (d >= r) continue;
+      const double w = (1 - d / r) * (1 - d / r);
+      weights += w;
+      sum += w * sizes_[entry.second];
+    }
+    return sum / weights;  // the nearest vertex has d < r
+  }
+
+ private:
+  using Point = boost::geometry::model::point<double, 3, boost::geometry::cs::cartesian>;
+  using Box = boost::geometry::model::box<Point>;
+  using Entry = std::pair<Point, std::size_t>;
+  using Tree = boost::geometry::index::rtree<Entry, boost::geometry::index::quadratic<16>>;
+  static Point point(const Eigen::Vector3d& x) { return Point(x.x(), x.y(), x.z()); }
+  static Eigen::Vector3d point_of(const Entry& e) {
+    return Eigen::Vector3d(e.first.get<0>(), e.first.get<1>(), e.first.get<2>());
+  }
+  std::vector<double> sizes_;
+  double smallest_;
+  Tree tree_;
+};
+
+// Gmsh's size callback with the earlier mesh's sizes for as long as it lives
+// (Gmsh keeps one callback per process, beyond this model).
+class EarlierSizes {
+ public:
+  EarlierSizes(const SizeMap& map, double scale) {
+    if (map.empty()) return;
+    auto size = std::make_shared<const EarlierSize>(map);
+    gmsh::model::mesh::setSizeCallback([size, scale](int, int, double x, double y, double z) {
+      return scale * (*size)(Eigen::Vector3d(x, y, z));
+    });
+    // Gmsh integrates 1 / size along each curve to place its nodes, halving
+    // the steps until two estimates agree to this absolute precision (default
+    // 1e-9); at the kinks of this size it halved 25 times between any two
+    // vertices (t106_turbine_cascade.step: 730 000 calls, 40 s; 21 000 and
+    // 1 s at 1e-4).
+    gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-4);
+    set_ = true;
+  }
+  ~EarlierSizes() {
+    if (!set_) return;
+    try {
+      gmsh::model::mesh::removeSizeCallback();
+      gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-9);
+    } catch (...) {  // a destructor must not throw
+    }
+  }
+  EarlierSizes(const EarlierSizes&) = delete;
+  EarlierSizes& operator=(const EarlierSizes&) = delete;
+
+ private:
+  bool set_ = false;
+};
+
 }  // namespace
 
 double size_floor(const CadMeshOptions& o) {
@@ -296,6 +384,14 @@ void check_size_fields(const CadModel& cad, const CadMeshOptions& o) {
     if (!(h > 0 && std::isfinite(h)))
       throw std::invalid_argument("vertex size at vertex " + std::to_string(v) + ": needs a finite size > 0");
   }
+  const auto& earlier = o.earlier_sizes;
+  if (earlier.points.size() != earlier.sizes.size())
+    throw std::invalid_argument("earlier sizes: " + std::to_string(earlier.points.size()) + " points but " +
+                                std::to_string(earlier.sizes.size()) + " sizes");
+  for (std::size_t i = 0; i < earlier.points.size(); ++i)
+    if (!earlier.points[i].allFinite() || !(earlier.sizes[i] > 0 && std::isfinite(earlier.sizes[i])))
+      throw std::invalid_argument("earlier size " + std::to_string(i + 1) +
+                                  ": needs a finite point and a finite size > 0");
 }
 
 io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
@@ -317,6 +413,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   const double loose = o.quads ? 1e-3 * size : tol;
   const double scale = o.quads ? 2.0 : 1.0;  // sizes before the quad subdivision (below)
   const meshing::GmshSession session({o.verbose, o.threads, cad.name(), o.time_limit_s});
+  const EarlierSizes earlier(o.earlier_sizes, scale);
   io::MshData d;
   std::map<int, int> maps[4];  // Gmsh tag -> model tag, per dimension
   const double max_size = scale * (o.size > 0 ? o.size : default_mesh_size(cad));
@@ -331,7 +428,8 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
       gmsh::option::setNumber("Mesh.ElementOrder", 1);
       gmsh::option::setNumber("Mesh.MeshSizeMax", max_size);
       if (o.size_min > 0) gmsh::option::setNumber("Mesh.MeshSizeMin", scale * size_floor(o));
-      gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", o.size_from_curvature);
+      // The earlier mesh's sizes hold its curvature sizing (SizeMap).
+      gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", o.earlier_sizes.empty() ? o.size_from_curvature : 0);
       if (o.quads) {
         // Quadrilaterals only (hom reads one element family per mesh):
         // Blossom recombination, then every element split into quads

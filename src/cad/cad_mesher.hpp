@@ -64,6 +64,18 @@ struct LocalSize {
   double size = 0.0;
 };
 
+/// The element sizes of an earlier mesh of the model, at its vertices (see
+/// size_map), to mesh it again with them in place of Gmsh's curvature sizing,
+/// so that balls finer than size_min need not lower Gmsh's global floor for
+/// the whole model. (refine_invalid.hpp's retries do not use them yet: on
+/// wing_fuselage.step's tetrahedra these sizes meshed 4 times as many nodes
+/// as the earlier mesh had; on a cube's cavity, test_cad, they keep it.)
+struct SizeMap {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> sizes;  ///< at `points`, > 0
+  bool empty() const { return points.empty(); }
+};
+
 struct CadMeshOptions {
   int dim = 3;                   ///< 3: tetrahedra of the solids; 2: triangles / quads of the faces
   bool quads = false;            ///< 2D: recombine into quadrilaterals (Mesh.RecombineAll)
@@ -83,6 +95,11 @@ struct CadMeshOptions {
   /// wins). Gmsh's floor Mesh.MeshSizeMin is global: a ball's size below
   /// size_min lowers that floor to it everywhere.
   std::vector<LocalSize> local_sizes;
+  /// Not empty: the size outside the balls is the earlier mesh's, a weighted
+  /// mean of its sizes at the vertices near the point (a Gmsh size callback,
+  /// continuous), and size_from_curvature is ignored (the earlier mesh has
+  /// it), so the floor size_floor() matters only where the balls ask for less.
+  SizeMap earlier_sizes;
   /// Mesh.Algorithm; 0: 6 (Frontal-Delaunay; 4.8.4's 8 crashes on surfaces
   /// with a pole), with the faces where it leaves slivers (angles below 3
   /// degrees) wider than twice the size meshed again with MeshAdapt (1)
@@ -111,13 +128,43 @@ struct CadMeshOptions {
 /// bounding-box diagonal / 20.
 double default_mesh_size(const CadModel& cad);
 
+/// The sizes of `mesh` (degree 1; any degree uses its vertices) at its
+/// vertices: the harmonic mean of the lengths of the straight edges at each
+/// (a planar mesh's points get z = 0). The harmonic mean weighs the short
+/// edges: the plain mean, raised by the edges that run out to coarser places,
+/// meshed the cube's cavity 14% coarser again (test_cad). Edges of length 0
+/// (a surface's pole, where a patch's side collapses) are left out, and so is
+/// a vertex with no other edge.
+template <class MeshT>
+SizeMap size_map(const MeshT& mesh) {
+  const Topology<typename MeshT::family> topology(mesh);
+  std::vector<double> sum(mesh.num_nodes(), 0.0);  // of 1 / length
+  std::vector<int> count(mesh.num_nodes(), 0);
+  for (const auto& [a, b] : topology.edges()) {
+    const double length = (mesh.node(a) - mesh.node(b)).norm();
+    if (!(length > 0)) continue;
+    sum[a] += 1 / length, sum[b] += 1 / length;
+    ++count[a], ++count[b];
+  }
+  SizeMap map;
+  for (int v : topology.vertices()) {
+    if (count[v] == 0) continue;
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    x.template head<MeshT::space_dim>() = mesh.node(v);
+    map.points.push_back(x);
+    map.sizes.push_back(count[v] / sum[v]);
+  }
+  return map;
+}
+
 /// Gmsh's global floor on the element size (Mesh.MeshSizeMin): size_min,
 /// lowered to the smallest local size; 0 when size_min is 0 (no floor).
 double size_floor(const CadMeshOptions& o);
 
 /// Throws std::invalid_argument naming the first bad entry of the size
 /// fields: a local size without a finite center, radius > 0 and size > 0,
-/// or a vertex size at a tag outside 1..num_vertices or not finite and > 0.
+/// a vertex size at a tag outside 1..num_vertices or not finite and > 0, or
+/// earlier sizes with a point not finite or a size not finite and > 0.
 /// cad_mesh_data checks them first; a caller may check them before meshing.
 void check_size_fields(const CadModel& cad, const CadMeshOptions& o);
 
