@@ -282,9 +282,9 @@ void add_local_sizes(const std::vector<LocalSize>& balls, double scale, double m
 // mean of the sizes at its vertices within r = 2 d + h of the point, weighted
 // by (1 - distance / r)^2, d the distance to the nearest vertex and h the
 // smallest size. The size is continuous: a vertex enters or leaves the mean
-// with weight 0. (The nearest vertex's size alone jumps between vertices,
-// and Gmsh's integration of 1 / size along a curve then subdivides without
-// end at the jumps: t106_turbine_cascade.step's curves filled 3 GB.)
+// with weight 0. (The nearest vertex's size alone jumps between vertices;
+// with it Gmsh's 1D meshing of t106_turbine_cascade.step's curves filled
+// 3 GB at the default integration precision, see EarlierSizes.)
 class EarlierSize {
  public:
   explicit EarlierSize(const SizeMap& map)
@@ -338,9 +338,9 @@ class EarlierSizes {
     });
     // Gmsh integrates 1 / size along each curve to place its nodes, halving
     // the steps until two estimates agree to this absolute precision (default
-    // 1e-9); at the kinks of this size it halved 25 times between any two
-    // vertices (t106_turbine_cascade.step: 730 000 calls, 40 s; 21 000 and
-    // 1 s at 1e-4).
+    // 1e-9), which a size blended between vertices hardly meets: on
+    // t106_turbine_cascade.step's curves 733 686 calls and 37 s at 1e-9,
+    // 20 990 calls and 0.9 s at 1e-4 (gmsh 4.8 from Python, 2026-12-06).
     gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-4);
     set_ = true;
   }
