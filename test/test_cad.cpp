@@ -577,13 +577,13 @@ TEST_CASE("earlier sizes (CadMeshOptions::earlier_sizes): a ball below size_min 
   const auto map = cad::size_map(first);
   REQUIRE(map.points.size() == map.sizes.size());
   REQUIRE(int(map.points.size()) == topology.num_vertices());
-  {  // the first vertex's size is the harmonic mean of its edges' lengths
+  {  // the first vertex's size is the mean length of its edges
     const int v = topology.vertices().front();
     double sum = 0;
     int n = 0;
     for (const auto& [a, b] : topology.edges())
-      if (a == v || b == v) sum += 1 / (first.node(a) - first.node(b)).norm(), ++n;
-    CHECK(map.sizes.front() == doctest::Approx(n / sum).epsilon(1e-12));
+      if (a == v || b == v) sum += (first.node(a) - first.node(b)).norm(), ++n;
+    CHECK(map.sizes.front() == doctest::Approx(sum / n).epsilon(1e-12));
     CHECK((map.points.front() - first.node(v)).norm() == 0.0);
   }
   // A ball of size 0.1 at the cube's face x = 5, 2 away from the cavity.
@@ -608,7 +608,7 @@ TEST_CASE("earlier sizes (CadMeshOptions::earlier_sizes): a ball below size_min 
   };
   const double at_cavity = mean_edge_near(first, cavity, 0.6);
   CHECK(mean_edge_near(lowered, cavity, 0.6) < 0.7 * at_cavity);
-  CHECK(mean_edge_near(local, cavity, 0.6) == doctest::Approx(at_cavity).epsilon(0.15));
+  CHECK(mean_edge_near(local, cavity, 0.6) == doctest::Approx(at_cavity).epsilon(0.25));
   CHECK(local.num_elements() < lowered.num_elements());
   // Both refine the ball as it asks.
   CHECK(mean_edge_near(local, centre, 0.3) < 0.2);

@@ -330,11 +330,11 @@ class EarlierSize {
 // (Gmsh keeps one callback per process, beyond this model).
 class EarlierSizes {
  public:
-  EarlierSizes(const SizeMap& map, double scale) {
+  EarlierSizes(const SizeMap& map, double floor, double scale) {
     if (map.empty()) return;
     auto size = std::make_shared<const EarlierSize>(map);
-    gmsh::model::mesh::setSizeCallback([size, scale](int, int, double x, double y, double z) {
-      return scale * (*size)(Eigen::Vector3d(x, y, z));
+    gmsh::model::mesh::setSizeCallback([size, floor, scale](int, int, double x, double y, double z) {
+      return scale * std::max(floor, (*size)(Eigen::Vector3d(x, y, z)));
     });
     // Gmsh integrates 1 / size along each curve to place its nodes, halving
     // the steps until two estimates agree to this absolute precision (default
@@ -413,7 +413,7 @@ io::MshData cad_mesh_data(const CadModel& cad, const CadMeshOptions& o) {
   const double loose = o.quads ? 1e-3 * size : tol;
   const double scale = o.quads ? 2.0 : 1.0;  // sizes before the quad subdivision (below)
   const meshing::GmshSession session({o.verbose, o.threads, cad.name(), o.time_limit_s});
-  const EarlierSizes earlier(o.earlier_sizes, scale);
+  const EarlierSizes earlier(o.earlier_sizes, o.size_min, scale);
   io::MshData d;
   std::map<int, int> maps[4];  // Gmsh tag -> model tag, per dimension
   const double max_size = scale * (o.size > 0 ? o.size : default_mesh_size(cad));

@@ -67,10 +67,7 @@ struct LocalSize {
 /// The element sizes of an earlier mesh of the model, at its vertices (see
 /// size_map), to mesh it again with them in place of Gmsh's curvature sizing,
 /// so that balls finer than size_min need not lower Gmsh's global floor for
-/// the whole model. (refine_invalid.hpp's retries do not use them yet: with
-/// the balls of wing_fuselage.step's 23 failing tetrahedra at p = 2 they gave
-/// 11444 tetrahedra where lowering the floor gave 8048. On a cube's cavity,
-/// test_cad, they keep its size.)
+/// the whole model (bench_curve --refine-invalid's retries).
 struct SizeMap {
   std::vector<Eigen::Vector3d> points;
   std::vector<double> sizes;  ///< at `points`, > 0
@@ -98,8 +95,9 @@ struct CadMeshOptions {
   std::vector<LocalSize> local_sizes;
   /// Not empty: the size outside the balls is the earlier mesh's, a weighted
   /// mean of its sizes at the vertices near the point (a Gmsh size callback,
-  /// continuous), and size_from_curvature is ignored (the earlier mesh has
-  /// it), so the floor size_floor() matters only where the balls ask for less.
+  /// continuous), never below size_min, and size_from_curvature is ignored
+  /// (the earlier mesh has it), so the floor size_floor() matters only where
+  /// the balls ask for less.
   SizeMap earlier_sizes;
   /// Mesh.Algorithm; 0: 6 (Frontal-Delaunay; 4.8.4's 8 crashes on surfaces
   /// with a pole), with the faces where it leaves slivers (angles below 3
@@ -130,21 +128,21 @@ struct CadMeshOptions {
 double default_mesh_size(const CadModel& cad);
 
 /// The sizes of `mesh` (degree 1; any degree uses its vertices) at its
-/// vertices: the harmonic mean of the lengths of the straight edges at each
-/// (a planar mesh's points get z = 0). The harmonic mean weighs the short
-/// edges: the plain mean, raised by the edges that run out to coarser places,
-/// meshed the cube's cavity 14% coarser again (test_cad). Edges of length 0
-/// (a surface's pole, where a patch's side collapses) are left out, and so is
-/// a vertex with no other edge.
+/// vertices: the mean length of the straight edges at each (a planar mesh's
+/// points get z = 0). Meshed again from it, wing_fuselage.step's first mesh
+/// (966 nodes) had 1029 nodes; from the harmonic mean, which weighs the short
+/// edges across its thin wing, 1658 (gmsh 4.8 from Python, 2026-12-06).
+/// Edges of length 0 (a surface's pole, where a patch's side collapses) are
+/// left out, and so is a vertex with no other edge.
 template <class MeshT>
 SizeMap size_map(const MeshT& mesh) {
   const Topology<typename MeshT::family> topology(mesh);
-  std::vector<double> sum(mesh.num_nodes(), 0.0);  // of 1 / length
+  std::vector<double> sum(mesh.num_nodes(), 0.0);
   std::vector<int> count(mesh.num_nodes(), 0);
   for (const auto& [a, b] : topology.edges()) {
     const double length = (mesh.node(a) - mesh.node(b)).norm();
     if (!(length > 0)) continue;
-    sum[a] += 1 / length, sum[b] += 1 / length;
+    sum[a] += length, sum[b] += length;
     ++count[a], ++count[b];
   }
   SizeMap map;
@@ -153,7 +151,7 @@ SizeMap size_map(const MeshT& mesh) {
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
     x.template head<MeshT::space_dim>() = mesh.node(v);
     map.points.push_back(x);
-    map.sizes.push_back(count[v] / sum[v]);
+    map.sizes.push_back(sum[v] / count[v]);
   }
   return map;
 }
