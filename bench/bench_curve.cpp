@@ -281,12 +281,7 @@ class Runner {
       const auto failing = hom::cad::failing_elements(r);
       if (failing.elements.empty()) break;
       const auto balls = hom::cad::balls_around(r.mesh, failing.elements);
-      mo.local_sizes.insert(mo.local_sizes.end(), balls.begin(), balls.end());
-      // Balls finer than the floor lower Gmsh's floor for the whole model, and
-      // curvature sizing then refines every curved place: outside the balls
-      // the first mesh's sizes are kept instead (CadMeshOptions::earlier_sizes).
-      if (mo.earlier_sizes.empty() && mo.size_from_curvature > 0 && hom::cad::size_floor(mo) < mo.size_min)
-        mo.earlier_sizes = hom::cad::size_map(linear);
+      hom::cad::refine_around(mo, balls, linear);  // outside the balls, maybe the first mesh's sizes
       const auto t0 = std::chrono::steady_clock::now();
       linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
       t_mesh = hom::bench::seconds_since(t0);

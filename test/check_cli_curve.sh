@@ -12,7 +12,8 @@
 # domain stopped at its tangled linear stage with nothing written. A mesh
 # folded at a node that only held nodes determine writes no mesh but its VTU,
 # the failing cells marked. --refine-invalid: bad uses refused; with
-# ../shared, an uncertified wing_fuselage mesh made valid by meshing finer.
+# ../shared, an uncertified wing_fuselage mesh made valid by meshing finer
+# around the failing elements (the first mesh's sizes kept elsewhere).
 # --size-ball and --vertex-size grade the mesh where they say. A user's
 # linear mesh (tetrahedra, planar quadrilaterals) gets its ears split.
 #   $1 = hom
@@ -229,11 +230,12 @@ if [[ -f "$wing" ]]; then
   [[ $rc -eq 0 && -s "$work/wing.msh" ]] || fail "wing_fuselage with --refine-invalid: exit $rc or no mesh"
   [[ $(tail -n 5 <<<"$log" | grep -c "^valid:.*certified valid everywhere") -eq 1 ]] ||
     fail "wing_fuselage: not certified"
-  # The vertices of a few tetrahedra slid on the CAD faces until their straight-sided counterparts inverted:
-  # hom quality measures those against the equilateral element and says so.
+  # The balls are finer than --size-min 14: the first mesh's sizes are kept elsewhere.
+  grep -q "^try 2 of 4: .*lowered from 14 to [0-9.]* in the balls, elsewhere the first mesh's sizes" <<<"$log" ||
+    fail "wing_fuselage: the second try does not keep the first mesh's sizes outside the balls"
+  # An independent read of the file: certified valid there too.
   quality=$("$hom" quality "$work/wing.msh" --certify) || fail "wing_fuselage: hom quality --certify rejects the mesh"
-  grep -q "elements measured against the equilateral element: their straight-sided counterparts are inverted" \
-    <<<"$quality" || fail "wing_fuselage: hom quality does not say which ideal replaced the inverted ones: $quality"
+  grep -q " 0 certified invalid, 0 undecided" <<<"$quality" || fail "wing_fuselage: hom quality: $quality"
 else
   echo "  (../shared/data/cad absent: the wing_fuselage case skipped)"
 fi
@@ -244,6 +246,10 @@ fi
 # --vertices`) each give more linear elements than the plain run and more
 # nodes within 0.05 of the corner. A ball on a planar model follows the
 # model into z = 0. Bad values are refused with exit 2 and nothing written.
+# A ball finer than --size-min with --size-curvature does not lower the
+# floor everywhere: on the built-in cube the cavity (centre (2.5, 2.5, 2.5),
+# away from the ball) keeps the coarser sizes of a first mesh without the
+# ball, with fewer than half the nodes there that --size-min 0.1 gives.
 nodes_near() {  # nodes_near IN.msh X Y Z R: the number of IN's nodes within R of (X, Y, Z)
   "$py" - "$@" <<'PY'
 import sys
@@ -311,6 +317,23 @@ done
 # A negative coordinate is a value, not an option.
 "$hom" curve "$work/bib.brep" --solids 1 --p 2 --size 0.1 -o "$work/sizeneg.msh" --threads 1 \
   --size-ball -0.4,0.4,0.4,0.05,0.05 >/dev/null 2>&1 || fail "--size-ball -0.4,...: refused"
+declare -A n_floor near_cavity near_ball
+for floor in 0.3 0.1; do
+  log=$("$hom" curve --p 2 --size 1 --size-curvature 24 --size-min $floor --size-ball 5,2.5,2.5,0.6,0.1 \
+        -o "$work/floor.msh" --json "$work/floor.json" --threads 2 2>&1) || { echo "$log"; fail "floor $floor: failed"; }
+  first=$(grep -c "meshed first without the balls" <<<"$log")
+  [[ $first -eq $([[ $floor == 0.3 ]] && echo 1 || echo 0) ]] ||
+    fail "--size-min $floor: 'meshed first without the balls' said $first times"
+  n_floor[$floor]=$(json_field "$work/floor.json" volume linear elements)
+  near_cavity[$floor]=$(nodes_near "$work/floor.msh" 2.5 2.5 2.5 0.6) || fail "could not read the mesh (python3-gmsh)"
+  near_ball[$floor]=$(nodes_near "$work/floor.msh" 5 2.5 2.5 0.6)
+  echo "  [size floor] --size-min $floor: ${n_floor[$floor]} tetrahedra, ${near_cavity[$floor]} nodes near the cavity," \
+       "${near_ball[$floor]} in the ball"
+done
+[[ ${n_floor[0.3]} -lt ${n_floor[0.1]} && $((2 * near_cavity[0.3])) -lt ${near_cavity[0.1]} ]] ||
+  fail "a ball below --size-min refined the cavity: ${n_floor[*]} tetrahedra, ${near_cavity[*]} nodes there"
+[[ $((2 * near_ball[0.3])) -gt ${near_ball[0.1]} ]] ||
+  fail "the ball lost its size with the earlier sizes: ${near_ball[*]} nodes in it"
 
 # 11. A user's linear mesh with ears (test/thin_prism_model.py: Gmsh's mesh
 # of a prism on a thin ellipse, whose cap triangles at the ellipse's sharp

@@ -528,23 +528,31 @@ TEST_CASE("meshing the cube with a cavity: every boundary node on the CAD") {
   }
 }
 
+namespace {
+
+/// The mean length of the edges of `mesh` whose end points `keep` accepts.
+template <class Keep>
+double mean_edge_length(const Mesh<Simplex<3>>& mesh, Keep keep) {
+  double sum = 0;
+  int n = 0;
+  const Topology<Simplex<3>> topology(mesh);
+  for (const auto& [a, b] : topology.edges())
+    if (keep(mesh.node(a), mesh.node(b))) sum += (mesh.node(a) - mesh.node(b)).norm(), ++n;
+  REQUIRE(n > 0);
+  return sum / n;
+}
+
+}  // namespace
+
 TEST_CASE("local sizes (CadMeshOptions::local_sizes): finer inside the ball, even below size_min") {
   const auto m = cad::cube_with_cavity_model();
   const Eigen::Vector3d centre(5.0, 2.5, 2.5);  // on the cube's face x = 5, away from the cavity
-  // The mean length of the tetrahedra's edges whose midpoints lie within
-  // [r0, r1) of the ball's centre.
+  // The mean length of the edges whose midpoints lie within [r0, r1) of the ball's centre.
   auto mean_edge = [&](const Mesh<Simplex<3>>& mesh, double r0, double r1) {
-    double sum = 0;
-    int n = 0;
-    for (int e = 0; e < mesh.num_elements(); ++e)
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) {
-          const Eigen::Vector3d a = mesh.node(mesh.vertex(e, i)), b = mesh.node(mesh.vertex(e, j));
-          const double r = ((a + b) / 2 - centre).norm();
-          if (r >= r0 && r < r1) sum += (a - b).norm(), ++n;
-        }
-    REQUIRE(n > 0);
-    return sum / n;
+    return mean_edge_length(mesh, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      const double r = ((a + b) / 2 - centre).norm();
+      return r >= r0 && r < r1;
+    });
   };
   cad::CadMeshOptions o;
   o.size = 1.0;
@@ -596,15 +604,11 @@ TEST_CASE("earlier sizes (CadMeshOptions::earlier_sizes): a ball below size_min 
   o.earlier_sizes = map;
   const auto local = cad::mesh_cad<Simplex<3>>(m, o);
   // The mean length of the edges with both ends within `r` of `x`.
+  // The mean length of the edges within r of x.
   auto mean_edge_near = [](const Mesh<Simplex<3>>& mesh, const Eigen::Vector3d& x, double r) {
-    double sum = 0;
-    int n = 0;
-    const Topology<Simplex<3>> t(mesh);
-    for (const auto& [a, b] : t.edges())
-      if ((mesh.node(a) - x).norm() < r && (mesh.node(b) - x).norm() < r)
-        sum += (mesh.node(a) - mesh.node(b)).norm(), ++n;
-    REQUIRE(n > 0);
-    return sum / n;
+    return mean_edge_length(mesh, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return (a - x).norm() < r && (b - x).norm() < r;
+    });
   };
   const double at_cavity = mean_edge_near(first, cavity, 0.6);
   CHECK(mean_edge_near(lowered, cavity, 0.6) < 0.7 * at_cavity);

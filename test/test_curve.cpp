@@ -346,6 +346,35 @@ TEST_CASE("refine_invalid: the failing elements by the first reason that applies
   }
 }
 
+TEST_CASE("refine_around: the balls added; the earlier mesh's sizes kept only where they would lower the floor") {
+  const auto m = cad::plate_with_holes_model();
+  const auto linear = planar_triangles(m, 0.9);
+  const auto balls = cad::balls_around(linear, {0, 1});
+  REQUIRE(balls.size() == 2);
+  const double finest = std::min(balls[0].size, balls[1].size);
+  cad::CadMeshOptions o;
+  o.size_min = finest / 2;  // the balls above the floor: Gmsh's floor stays
+  o.size_from_curvature = 12;
+  CHECK_FALSE(cad::refine_around(o, balls, linear));
+  CHECK(o.local_sizes.size() == 2);
+  CHECK(o.earlier_sizes.empty());
+  o.size_min = 2 * finest;  // now below it, but without curvature sizing the floor alone is lowered
+  o.size_from_curvature = 0;
+  CHECK_FALSE(cad::refine_around(o, balls, linear));
+  CHECK(o.earlier_sizes.empty());
+  o.size_from_curvature = 12;
+  CHECK(cad::balls_lower_curvature_floor(o));
+  CHECK(cad::refine_around(o, balls, linear));
+  CHECK(o.local_sizes.size() == 6);
+  const auto first = cad::size_map(linear);
+  REQUIRE(o.earlier_sizes.points.size() == first.points.size());
+  CHECK(o.earlier_sizes.sizes == first.sizes);
+  // A later, finer mesh does not replace the first mesh's sizes (it holds the balls' sizes).
+  const auto finer = planar_triangles(m, 0.45);
+  CHECK(cad::refine_around(o, balls, finer));
+  CHECK(o.earlier_sizes.sizes == first.sizes);
+}
+
 // Two nodes on one face whose parameters are within a tenth of the face's
 // parameter box: no periodic seam between them.
 static bool near_in_parameters(const cad::CadModel& m, const NodeClass& a, const NodeClass& b) {

@@ -341,6 +341,7 @@ class EarlierSizes {
     // 1e-9), which a size blended between vertices hardly meets: on
     // t106_turbine_cascade.step's curves 733 686 calls and 37 s at 1e-9,
     // 20 990 calls and 0.9 s at 1e-4 (gmsh 4.8 from Python, 2026-12-06).
+    gmsh::option::getNumber("Mesh.LcIntegrationPrecision", precision_);
     gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-4);
     set_ = true;
   }
@@ -348,7 +349,7 @@ class EarlierSizes {
     if (!set_) return;
     try {
       gmsh::model::mesh::removeSizeCallback();
-      gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-9);
+      gmsh::option::setNumber("Mesh.LcIntegrationPrecision", precision_);
     } catch (...) {  // a destructor must not throw
     }
   }
@@ -357,6 +358,7 @@ class EarlierSizes {
 
  private:
   bool set_ = false;
+  double precision_ = 0.0;  ///< Mesh.LcIntegrationPrecision before, put back on exit
 };
 
 }  // namespace

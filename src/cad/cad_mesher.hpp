@@ -67,7 +67,8 @@ struct LocalSize {
 /// The element sizes of an earlier mesh of the model, at its vertices (see
 /// size_map), to mesh it again with them in place of Gmsh's curvature sizing,
 /// so that balls finer than size_min need not lower Gmsh's global floor for
-/// the whole model (bench_curve --refine-invalid's retries).
+/// the whole model (--refine-invalid's retries, and hom curve's --size-ball
+/// below --size-min).
 struct SizeMap {
   std::vector<Eigen::Vector3d> points;
   std::vector<double> sizes;  ///< at `points`, > 0
@@ -159,6 +160,13 @@ SizeMap size_map(const MeshT& mesh) {
 /// Gmsh's global floor on the element size (Mesh.MeshSizeMin): size_min,
 /// lowered to the smallest local size; 0 when size_min is 0 (no floor).
 double size_floor(const CadMeshOptions& o);
+
+/// True when the balls ask for less than size_min while curvature sizing is
+/// on: Gmsh would then refine every curved place of the model to the balls'
+/// size, so the caller meshes with earlier_sizes outside the balls instead.
+inline bool balls_lower_curvature_floor(const CadMeshOptions& o) {
+  return o.size_from_curvature > 0 && size_floor(o) < o.size_min;
+}
 
 /// Throws std::invalid_argument naming the first bad entry of the size
 /// fields: a local size without a finite center, radius > 0 and size > 0,

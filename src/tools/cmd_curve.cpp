@@ -20,7 +20,11 @@
 // (moved there if needed); other models a surface mesh. Sizes: --size
 // (the largest), --size-min, --size-curvature, and size fields as in thesis
 // section 4.3.3: --size-ball (size H within distance R of a point, in the
-// model's coordinates) and --vertex-size (size H at model vertices). --quads asks for
+// model's coordinates) and --vertex-size (size H at model vertices). Gmsh's
+// floor (--size-min) is global, so a ball finer than it would, with
+// --size-curvature, refine every curved place of the model: the model is
+// then meshed first without the balls, and that mesh's sizes are kept
+// outside them (CadMeshOptions::earlier_sizes). --quads asks for
 // quadrilaterals (surface and planar meshes). --solids keeps the mesh of
 // some solids (and, with --surface, of their faces): one region of a model
 // whose solids touch without sharing faces, such as a body and the far
@@ -54,6 +58,8 @@
 // its size, cad_mesher.hpp's LocalSize), and curved again, up to N times.
 // Where the model itself is too coarse for its mesh (a fuselage's tail tip
 // thinner than the elements there), this is what makes the result valid.
+// Balls finer than --size-min with --size-curvature keep the first mesh's
+// sizes elsewhere, as --size-ball does (refine_invalid.hpp's refine_around).
 //
 // Exit status: 0 valid mesh written; 3 the result is invalid (nothing
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
@@ -84,6 +90,7 @@
 #include "mesh_ears.hpp"
 #include "mesh_io.hpp"
 #include "options.hpp"
+#include "refine_invalid.hpp"
 
 namespace po = boost::program_options;
 
@@ -255,9 +262,10 @@ auto faces_of(const hom::cad::CadModel& model, const hom::cad::CadMeshOptions& m
   return hom::cad::mesh_cad<Family, hom::WarpBlend, S>(model, m);
 }
 
-/// Says what the next try of --refine-invalid changes.
-void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::cad::CadMeshOptions& m, int attempt,
-                      int attempts) {
+/// Says what the next try of --refine-invalid changes: `before` are the
+/// options of the try that failed, `after` those of the next.
+void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::cad::CadMeshOptions& before,
+                      const hom::cad::CadMeshOptions& after, int attempt, int attempts) {
   double smallest = balls.front().size, largest = smallest;
   for (const auto& b : balls) {
     smallest = std::min(smallest, b.size);
@@ -265,8 +273,9 @@ void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::
   }
   std::printf("\ntry %d of %d: the model meshed again, finer around the %d failing elements (size %.3g to %.3g there)",
               attempt, attempts, int(balls.size()), smallest, largest);
-  const double floor = hom::cad::size_floor(m);  // before the new balls; 0 when --size-min is 0
+  const double floor = hom::cad::size_floor(before);  // 0 when --size-min is 0
   if (floor > smallest) std::printf("; the size floor (--size-min) lowered from %.3g to %.3g", floor, smallest);
+  if (floor > smallest && !after.earlier_sizes.empty()) std::printf(" in the balls, elsewhere the first mesh's sizes");
   std::printf("\n");
   std::fflush(stdout);
 }
@@ -423,19 +432,34 @@ int run(int argc, char** argv) {
       }
     });
   }
-  // Meshes `model` (mesh_model(model, options)) and curves the mesh; with
-  // --refine-invalid an invalid result is tried again, the model meshed finer
-  // around its failing elements (the balls of earlier tries kept).
-  auto mesh_and_curve = [&](const hom::cad::CadModel& model, auto mesh_model) -> int {
+  // The options `m` for meshing `model` with mesh_model(model, options):
+  // with --size-ball finer than --size-min and --size-curvature, the model is
+  // meshed first without the balls and its sizes kept outside them, so that
+  // the balls do not lower Gmsh's floor everywhere (refine_around).
+  auto with_balls = [&](const hom::cad::CadModel& model, auto mesh_model) {
     hom::cad::CadMeshOptions m = mo;
+    if (!hom::cad::balls_lower_curvature_floor(m)) return m;
+    std::vector<hom::cad::LocalSize> balls;
+    balls.swap(m.local_sizes);
+    hom::cad::refine_around(m, balls, mesh_model(model, m));
+    std::printf("--size-ball finer than --size-min: the model meshed first without the balls, its sizes kept "
+                "outside them\n");
+    return m;
+  };
+  // Meshes `model` and curves the mesh; with --refine-invalid an invalid
+  // result is tried again, the model meshed finer around its failing
+  // elements (the balls of earlier tries kept).
+  auto mesh_and_curve = [&](const hom::cad::CadModel& model, auto mesh_model) -> int {
+    hom::cad::CadMeshOptions m = with_balls(model, mesh_model);
     for (int attempt = 0;; ++attempt) {
       const bool last = attempt == o.refine_invalid;
       std::vector<hom::cad::LocalSize> balls;
       const auto linear = mesh_model(model, m);
       const int status = hom::tools::curve_and_write(model, linear, co, elapsed(), last ? nullptr : &balls);
       if (last || balls.empty()) return status;
-      print_refinement(balls, m, attempt + 2, o.refine_invalid + 1);
-      m.local_sizes.insert(m.local_sizes.end(), balls.begin(), balls.end());
+      const hom::cad::CadMeshOptions before = m;
+      hom::cad::refine_around(m, balls, linear);
+      print_refinement(balls, before, m, attempt + 2, o.refine_invalid + 1);
       t0 = std::chrono::steady_clock::now();
     }
   };
@@ -445,7 +469,8 @@ int run(int argc, char** argv) {
       return hom::cad::mesh_cad<hom::Simplex<3>>(model, m);
     };
     if (o.bl_first > 0.0)
-      return hom::tools::boundary_layer_and_write(cad, tetrahedra(cad, mo), boundary_layer_options(o), co);
+      return hom::tools::boundary_layer_and_write(cad, tetrahedra(cad, with_balls(cad, tetrahedra)),
+                                                  boundary_layer_options(o), co);
     return mesh_and_curve(cad, tetrahedra);
   }
   if (o.bl_first > 0.0)
