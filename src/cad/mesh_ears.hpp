@@ -13,6 +13,7 @@
 /// ear has, is much farther.
 
 #include <algorithm>
+#include <cstdint>
 #include <map>
 #include <set>
 #include <utility>
@@ -42,6 +43,39 @@ inline std::vector<std::set<int>> node_curves(const io::MshData& d, const CadMod
   return out;
 }
 
+/// The mesh edges of `d`'s triangles and quadrilaterals (a volume mesh's
+/// boundary facets) that lie on a CAD curve (the file comment's test), each
+/// as its two node tags (ascending) and the curve's tag.
+inline std::map<std::pair<std::int64_t, std::int64_t>, int> edges_on_curves(const io::MshData& d, const CadModel& cad,
+                                                                          const GeometryModel<3>& geometry) {
+  constexpr int gmsh_triangle = 2, gmsh_quad = 3;
+  const auto curves = node_curves(d, cad);
+  auto point = [&](std::int64_t tag) {
+    const auto& x = d.nodes[tag - 1].x;
+    return Eigen::Vector3d(x[0], x[1], x[2]);
+  };
+  std::map<std::pair<std::int64_t, std::int64_t>, int> on_curve;
+  for (const auto& e : d.elements) {
+    if (e.type != gmsh_triangle && e.type != gmsh_quad) continue;
+    const auto n = d.nodes_of(e);
+    for (std::size_t k = 0; k < n.size(); ++k) {
+      const std::int64_t a = std::min(n[k], n[(k + 1) % n.size()]), b = std::max(n[k], n[(k + 1) % n.size()]);
+      if (on_curve.count({a, b})) continue;
+      const Eigen::Vector3d mid = 0.5 * (point(a) + point(b));
+      const double length = (point(b) - point(a)).norm();
+      for (int c : curves[a - 1]) {
+        if (!curves[b - 1].count(c)) continue;
+        const auto* g = geometry.curve(c);
+        if (g && (g->evaluate(g->project(mid)) - mid).norm() <= 0.25 * length) {
+          on_curve[{a, b}] = c;
+          break;
+        }
+      }
+    }
+  }
+  return on_curve;
+}
+
 }  // namespace detail
 
 /// Splits the ears of a linear mesh classified on `cad` (tetrahedra with the
@@ -62,34 +96,12 @@ int split_mesh_ears(Mesh<Family, Nodes, SpaceDim>& mesh, const CadModel& cad) {
     return 0;
   } else {
     if (mesh.degree() != 1) return 0;
-    constexpr int gmsh_line = 1, gmsh_triangle = 2, gmsh_quad = 3;
+    constexpr int gmsh_line = 1;
     io::MshData d = io::to_msh_data(mesh);  // node tags: mesh index + 1; z = 0 for a planar mesh
-    const auto curves = detail::node_curves(d, cad);
     const auto geometry = cad.geometry_model();
-    auto point = [&](std::int64_t tag) {
-      const auto& x = d.nodes[tag - 1].x;
-      return Eigen::Vector3d(x[0], x[1], x[2]);
-    };
-    // The curve of each edge of the 2D elements (facets of a volume mesh).
-    std::map<std::pair<std::int64_t, std::int64_t>, int> on_curve;
-    for (const auto& e : d.elements) {
-      if (e.type != gmsh_triangle && e.type != gmsh_quad) continue;
-      const auto n = d.nodes_of(e);
-      for (std::size_t k = 0; k < n.size(); ++k) {
-        const std::int64_t a = std::min(n[k], n[(k + 1) % n.size()]), b = std::max(n[k], n[(k + 1) % n.size()]);
-        if (on_curve.count({a, b})) continue;
-        const Eigen::Vector3d mid = 0.5 * (point(a) + point(b));
-        const double length = (point(b) - point(a)).norm();
-        for (int c : curves[a - 1]) {
-          if (!curves[b - 1].count(c)) continue;
-          const auto* g = geometry.curve(c);
-          if (g && (g->evaluate(g->project(mid)) - mid).norm() <= 0.25 * length) {
-            on_curve[{a, b}] = c;
-            break;
-          }
-        }
-      }
-    }
+    const auto on_curve = detail::edges_on_curves(d, cad, geometry);
+    if (on_curve.size() < 2) return 0;  // an ear has two edges on one curve
+    // Gmsh's line elements on the curves, which the splits read.
     const std::int64_t first_line = d.elements.empty() ? 1 : d.elements.back().tag + 1;
     std::int64_t tag = first_line;
     for (const auto& [edge, c] : on_curve) {
