@@ -262,10 +262,11 @@ auto faces_of(const hom::cad::CadModel& model, const hom::cad::CadMeshOptions& m
   return hom::cad::mesh_cad<Family, hom::WarpBlend, S>(model, m);
 }
 
-/// Says what the next try of --refine-invalid changes: `before` are the
-/// options of the try that failed, `after` those of the next.
-void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::cad::CadMeshOptions& before,
-                      const hom::cad::CadMeshOptions& after, int attempt, int attempts) {
+/// Says what the next try of --refine-invalid changes: `floor` is the size
+/// floor of the try that failed (0: none), `kept_sizes` whether the next
+/// keeps the first mesh's sizes outside the balls (refine_around).
+void print_refinement(const std::vector<hom::cad::LocalSize>& balls, double floor, bool kept_sizes, int attempt,
+                      int attempts) {
   double smallest = balls.front().size, largest = smallest;
   for (const auto& b : balls) {
     smallest = std::min(smallest, b.size);
@@ -273,9 +274,8 @@ void print_refinement(const std::vector<hom::cad::LocalSize>& balls, const hom::
   }
   std::printf("\ntry %d of %d: the model meshed again, finer around the %d failing elements (size %.3g to %.3g there)",
               attempt, attempts, int(balls.size()), smallest, largest);
-  const double floor = hom::cad::size_floor(before);  // 0 when --size-min is 0
   if (floor > smallest) std::printf("; the size floor (--size-min) lowered from %.3g to %.3g", floor, smallest);
-  if (floor > smallest && !after.earlier_sizes.empty()) std::printf(" in the balls, elsewhere the first mesh's sizes");
+  if (floor > smallest && kept_sizes) std::printf(" in the balls, elsewhere the first mesh's sizes");
   std::printf("\n");
   std::fflush(stdout);
 }
@@ -457,9 +457,9 @@ int run(int argc, char** argv) {
       const auto linear = mesh_model(model, m);
       const int status = hom::tools::curve_and_write(model, linear, co, elapsed(), last ? nullptr : &balls);
       if (last || balls.empty()) return status;
-      const hom::cad::CadMeshOptions before = m;
-      hom::cad::refine_around(m, balls, linear);
-      print_refinement(balls, before, m, attempt + 2, o.refine_invalid + 1);
+      const double floor = hom::cad::size_floor(m);  // before the new balls
+      const bool kept_sizes = hom::cad::refine_around(m, balls, linear);
+      print_refinement(balls, floor, kept_sizes, attempt + 2, o.refine_invalid + 1);
       t0 = std::chrono::steady_clock::now();
     }
   };
