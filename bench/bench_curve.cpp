@@ -280,7 +280,7 @@ class Runner {
     for (; tries <= s_.refine_invalid; ++tries) {
       const auto failing = hom::cad::failing_elements(r);
       if (failing.elements.empty()) break;
-      const auto balls = hom::cad::balls_around(r.mesh, failing.elements);
+      auto balls = hom::cad::balls_around(r.mesh, failing.elements);
       hom::cad::refine_around(mo, balls, linear);  // outside the balls, maybe the first mesh's sizes
       const auto t0 = std::chrono::steady_clock::now();
       linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);

@@ -355,24 +355,44 @@ TEST_CASE("refine_around: the balls added; the earlier mesh's sizes kept only wh
   cad::CadMeshOptions o;
   o.size_min = finest / 2;  // the balls above the floor: Gmsh's floor stays
   o.size_from_curvature = 12;
-  CHECK_FALSE(cad::refine_around(o, balls, linear));
+  auto added = balls;
+  CHECK_FALSE(cad::refine_around(o, added, linear));
   CHECK(o.local_sizes.size() == 2);
   CHECK(o.earlier_sizes.empty());
+  o = {};
   o.size_min = 2 * finest;  // now below it, but without curvature sizing the floor alone is lowered
-  o.size_from_curvature = 0;
-  CHECK_FALSE(cad::refine_around(o, balls, linear));
+  added = balls;
+  CHECK_FALSE(cad::refine_around(o, added, linear));
   CHECK(o.earlier_sizes.empty());
+  o = {};
+  o.size_min = 2 * finest;
   o.size_from_curvature = 12;
+  added = balls;
+  CHECK(cad::refine_around(o, added, linear));
   CHECK(cad::balls_lower_curvature_floor(o));
-  CHECK(cad::refine_around(o, balls, linear));
-  CHECK(o.local_sizes.size() == 6);
+  CHECK(o.local_sizes.size() == 2);
   const auto first = cad::size_map(linear);
   REQUIRE(o.earlier_sizes.points.size() == first.points.size());
   CHECK(o.earlier_sizes.sizes == first.sizes);
   // A later, finer mesh does not replace the first mesh's sizes (it holds the balls' sizes).
   const auto finer = planar_triangles(m, 0.45);
-  CHECK(cad::refine_around(o, balls, finer));
+  added = balls;
+  CHECK(cad::refine_around(o, added, finer));
   CHECK(o.earlier_sizes.sizes == first.sizes);
+  // The same places failed again: those balls get half the sizes of the
+  // earlier balls they lie in; a ball elsewhere keeps its own.
+  CHECK(o.local_sizes.size() == 4);
+  for (int k = 0; k < 2; ++k) {
+    double expected = balls[k].size;
+    for (const auto& b : balls)
+      if ((balls[k].center - b.center).norm() < b.radius) expected = std::min(expected, b.size / 2);
+    CHECK(added[k].size == doctest::Approx(expected));
+    CHECK(added[k].size <= balls[k].size / 2);
+  }
+  std::vector<cad::LocalSize> elsewhere = {balls[0]};
+  elsewhere[0].center += Eigen::Vector3d(100, 0, 0);
+  CHECK(cad::refine_around(o, elsewhere, finer));
+  CHECK(elsewhere[0].size == balls[0].size);
 }
 
 // Two nodes on one face whose parameters are within a tenth of the face's

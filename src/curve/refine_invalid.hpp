@@ -94,7 +94,10 @@ std::vector<LocalSize> balls_around(const MeshT& mesh, const std::vector<int>& e
   return balls;
 }
 
-/// Adds `balls` to `options` for the next mesh of the model. When they ask
+/// Adds `balls` to `options` for the next mesh of the model. A ball centred
+/// in one of the options' earlier balls, where the model failed again at that
+/// ball's size, gets at most half that size, so that each try is finer there
+/// than the last whatever the failing elements' widths. When they ask
 /// for less than size_min with curvature sizing on (balls_lower_curvature_floor),
 /// `earlier`'s sizes are kept outside the balls (CadMeshOptions::earlier_sizes;
 /// the first such mesh's, since later ones hold the balls' sizes) rather than
@@ -102,7 +105,10 @@ std::vector<LocalSize> balls_around(const MeshT& mesh, const std::vector<int>& e
 /// the lowered floor took four meshes to 11297 tetrahedra, these sizes three
 /// to 4411. Returns whether earlier sizes are in use.
 template <class MeshT>
-bool refine_around(CadMeshOptions& options, const std::vector<LocalSize>& balls, const MeshT& earlier) {
+bool refine_around(CadMeshOptions& options, std::vector<LocalSize>& balls, const MeshT& earlier) {
+  for (auto& ball : balls)
+    for (const auto& before : options.local_sizes)
+      if ((ball.center - before.center).norm() < before.radius) ball.size = std::min(ball.size, before.size / 2);
   options.local_sizes.insert(options.local_sizes.end(), balls.begin(), balls.end());
   if (options.earlier_sizes.empty() && balls_lower_curvature_floor(options))
     options.earlier_sizes = size_map(earlier);
