@@ -6,7 +6,11 @@
 //     triangles and quadrilaterals on a torus at p = 1..10;
 //   - at a pole of the sphere's parameterization the normal is the limit
 //     from inside the element, so an element with a vertex at the pole is
-//     certified valid, while a zero normal there would make it invalid.
+//     certified valid, while a zero normal there would make it invalid;
+//   - at a cone's apex, where the normal turns with the angle around the
+//     axis, a fan element's normals (at the apex node and at the quadrature
+//     points) are the cone's along the element, whatever angle the apex node
+//     itself carries, and the element certifies valid.
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
@@ -17,13 +21,16 @@
 #include "hom/basis/lagrange.hpp"
 #include "hom/element/cube.hpp"
 #include "hom/element/simplex.hpp"
+#include "hom/geometry/parametric_surface.hpp"
 #include "hom/geometry/sphere.hpp"
 #include "hom/geometry/torus.hpp"
 #include "hom/nodes/gauss_lobatto.hpp"
 #include "hom/nodes/warp_blend.hpp"
+#include "hom/quadrature/quadrature_policy.hpp"
 #include "hom/quality/certify.hpp"
 #include "hom/surface/certified_surface.hpp"
 #include "hom/surface/normal_jacobian_bernstein.hpp"
+#include "hom/surface/surface_element_quality.hpp"
 #include "hom/surface/unit_normal.hpp"
 
 using namespace hom;
@@ -163,4 +170,67 @@ TEST_CASE("unit normal: an element straddling a periodic seam has its mean param
   // The plain mean of the longitudes lies half a turn away, on the far side.
   CHECK((sphere.evaluate(Eigen::Vector2d(UV.rowwise().mean())) - centroid).norm() > 1.0);
   CHECK((sphere.evaluate(mean) - centroid).norm() < 0.05);
+}
+
+TEST_CASE("unit normal: at a cone's apex the normals follow the element, whatever angle the apex node carries") {
+  using F = Simplex<2>;
+  using N = WarpBlend;
+  // S(u, v) = ((1 - v) R cos u, (1 - v) R sin u, H v): the apex at v = 1,
+  // where S_u vanishes; the outward normal is (H cos u, H sin u, R) / |.|.
+  const double R = 1.0, H = 3.0;
+  const ParametricSurface cone(
+      [=](const Eigen::Vector2d& p) {
+        return Eigen::Vector3d((1 - p[1]) * R * std::cos(p[0]), (1 - p[1]) * R * std::sin(p[0]), H * p[1]);
+      },
+      [=](const Eigen::Vector2d& p) {
+        Eigen::Matrix<double, 3, 2> d;
+        d << -(1 - p[1]) * R * std::sin(p[0]), -R * std::cos(p[0]),  //
+            (1 - p[1]) * R * std::cos(p[0]), -R * std::sin(p[0]),    //
+            0.0, H;
+        return d;
+      },
+      [](const Eigen::Vector2d&) { return SurfaceSecondDerivatives{}; },
+      {0.0, 2 * std::numbers::pi, true}, {0.0, 1.0, false});
+  auto normal_at = [&](double u) { return Eigen::Vector3d(H * std::cos(u), H * std::sin(u), R).normalized(); };
+
+  // A degree-3 fan triangle spanning the angles 1.7 to 2.3 (its middle 2.0),
+  // its sides at the apex on the cone's lines (as hom curve places them):
+  // u = 1.7 + 0.6 xi / (1 - eta), v = 0.6 + 0.4 eta. The apex node then
+  // carries the angle 0 (and, through the seam, 2 pi), which names the same point.
+  const int p = 3;
+  const auto& nodes = lagrange_basis<F, N>(p).nodes();
+  Eigen::Matrix2Xd UV(2, Eigen::Index(nodes.size()));
+  Eigen::Matrix3Xd X(3, UV.cols());
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const Eigen::Vector2d xi = nodes[i];
+    const double eta = xi[1];
+    UV.col(Eigen::Index(i)) << (eta < 1 ? 1.7 + 0.6 * xi[0] / (1 - eta) : 2.0), 0.6 + 0.4 * eta;
+    X.col(Eigen::Index(i)) = cone.evaluate(UV.col(Eigen::Index(i)));
+  }
+  const Eigen::Matrix2Xd along = UV;  // the parameters that follow the element
+  REQUIRE(UV(1, 2) == 1.0);  // vertex 2 is the apex
+  UV(0, 2) = 2 * std::numbers::pi - 0.1;
+  CHECK((cone.evaluate(UV.col(2)) - X.col(2)).norm() < 1e-15);
+  CHECK(unit_normal(cone, UV.col(2)).norm() == 0.0);
+
+  // The apex node's normal: the cone's at the mean angle of the other nodes.
+  const Eigen::Matrix3Xd nu = element_unit_normals(cone, UV);
+  CHECK((nu.col(2) - normal_at(2.0)).norm() < 1e-5);
+  for (Eigen::Index i = 0; i < nu.cols(); ++i)
+    if (i != 2) CHECK((nu.col(i) - normal_at(UV(0, i))).norm() < 1e-12);
+  // The apex's own angle would give the far side's normal (they differ by
+  // more than 90 degrees), and the element would be certified folded.
+  CHECK(normal_at(UV(0, 2)).dot(normal_at(2.0)) < 0.0);
+  Eigen::Matrix3Xd far_side = nu;
+  far_side.col(2) = normal_at(UV(0, 2));
+  CHECK(certify_surface_element<F, N>(p, X, far_side, CertifyOptions{}).status == Certificate::certified_invalid);
+  CHECK(certify_surface_element<F, N>(p, X, nu, CertifyOptions{}).status == Certificate::certified_valid);
+
+  // The normals at the quadrature points: those at the parameters that
+  // follow the element, not at ones interpolated from the apex's angle 0.
+  const auto rule = quadrature_for<F, DefaultExactness>(p);
+  const auto& tab = tabulation<F, N>(p, rule);
+  const SurfaceNormals at = surface_normals(tab, cone, UV);
+  const Eigen::Matrix2Xd uq = along * tab.shape_values.transpose();
+  for (int q = 0; q < tab.num_points(); ++q) CHECK((at.points.col(q) - normal_at(uq(0, q))).norm() < 1e-9);
 }
