@@ -15,9 +15,9 @@
 /// fuselage of revolution) it is not: the normal turns with the angle around
 /// the axis, the parameter whose derivative vanishes there, so the node's
 /// own value of it (arbitrary: every value gives the apex) is replaced by
-/// the element's first (free_parameters, parameters_at_poles). Otherwise a
-/// fan element at the apex is oriented by the normal of the cone's far side
-/// and scores folded however fine the mesh.
+/// the mean of the element's other nodes' (free_parameters,
+/// parameters_at_poles). Otherwise a fan element at the apex is oriented by
+/// the normal of the cone's far side and scores folded however fine the mesh.
 
 #include <algorithm>
 #include <array>
