@@ -271,7 +271,8 @@ class Runner {
   /// meshed again finer around its failing elements (balls of the earlier
   /// tries kept; src/curve/refine_invalid.hpp) and curved again, as hom
   /// curve --refine-invalid does. `linear`, `t_mesh` and `r` become the last
-  /// try's. Returns the number of tries (1: the first mesh).
+  /// try's. A try whose meshing fails (Gmsh) ends the tries with the last
+  /// curved one's result. Returns the number of tries (1: the first mesh).
   template <hom::ElementFamily F, int S>
   int refine_invalid(const hom::cad::CadModel& cad, hom::cad::CadMeshOptions mo, const hom::cad::CurveOptions& o,
                      hom::cad::CurvedMesh<F, S>& linear, double& t_mesh,
@@ -283,7 +284,13 @@ class Runner {
       auto balls = hom::cad::balls_around(r.mesh, failing.elements);
       hom::cad::refine_around(mo, balls, linear);  // outside the balls, maybe the first mesh's sizes
       const auto t0 = std::chrono::steady_clock::now();
-      linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
+      try {
+        linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
+      } catch (const hom::cad::MeshingError& e) {
+        std::printf("   p = %d: %d elements fail; try %d: meshing failed (%s); the result stands at try %d's\n", o.p,
+                    int(failing.elements.size()), tries + 1, e.what(), tries);
+        break;
+      }
       t_mesh = hom::bench::seconds_since(t0);
       std::printf("   p = %d: %d elements fail; try %d: the model meshed again finer around them (size floor %.3g), "
                   "%d elements, %d nodes (Gmsh, %.2f s)\n",

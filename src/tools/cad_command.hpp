@@ -135,8 +135,10 @@ void classify_user_mesh(MeshT& mesh, const cad::CadModel& cad, double tolerance)
 /// CurveOptions::certify, every element certified valid. An invalid result writes
 /// no mesh: only the JSON report, which says what happened, and the VTU, whose
 /// fields mark the failing elements. Returns the exit status: 0 written, 3 invalid.
-/// With `retry` (another try follows), an invalid result writes nothing at all
-/// and the balls around its failing elements (balls_around) are put there.
+/// With `retry` (another try may follow), an invalid result also puts the
+/// balls around its failing elements (balls_around) there; its report and
+/// VTU are written all the same (the next try's overwrite them), so that a
+/// next try whose meshing fails leaves them.
 template <class MeshT>
 int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadCommandOptions& o, double t_linear,
                     std::vector<cad::LocalSize>* retry = nullptr) {
@@ -191,7 +193,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
                      cmd, n);
     }
     print_failing_elements(r, failing.elements);
-    if (retry && !(*retry = cad::balls_around(r.mesh, failing.elements)).empty()) return 3;
+    if (retry) *retry = cad::balls_around(r.mesh, failing.elements);
   } else {
     std::printf("valid: every element valid at every quadrature point and node%s, every boundary node on its CAD entity\n",
                 r.certification ? " and certified valid everywhere" : "");

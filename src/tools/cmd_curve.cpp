@@ -448,19 +448,28 @@ int run(int argc, char** argv) {
   };
   // Meshes `model` and curves the mesh; with --refine-invalid an invalid
   // result is tried again, the model meshed finer around its failing
-  // elements (the balls of earlier tries kept).
+  // elements (the balls of earlier tries kept). A try whose meshing fails
+  // ends the tries with the last curved one's result (its report and VTU
+  // are written; no mesh).
   auto mesh_and_curve = [&](const hom::cad::CadModel& model, auto mesh_model) -> int {
     hom::cad::CadMeshOptions m = with_balls(model, mesh_model);
+    auto linear = mesh_model(model, m);
     for (int attempt = 0;; ++attempt) {
       const bool last = attempt == o.refine_invalid;
       std::vector<hom::cad::LocalSize> balls;
-      const auto linear = mesh_model(model, m);
       const int status = hom::tools::curve_and_write(model, linear, co, elapsed(), last ? nullptr : &balls);
       if (last || balls.empty()) return status;
       const double floor = hom::cad::size_floor(m);  // before the new balls
       const bool kept_sizes = hom::cad::refine_around(m, balls, linear);
       print_refinement(balls, floor, kept_sizes, attempt + 2, o.refine_invalid + 1);
       t0 = std::chrono::steady_clock::now();
+      try {
+        linear = mesh_model(model, m);
+      } catch (const hom::cad::MeshingError& e) {
+        std::fprintf(stderr, "hom: curve: try %d: %s; the result stands at try %d's (invalid, no mesh written)\n",
+                     attempt + 2, e.what(), attempt + 1);
+        return status;
+      }
     }
   };
   if (cad.num_solids() > 0 && !o.surface) {
