@@ -318,14 +318,19 @@ TEST_CASE("refine_invalid: the failing elements by the first reason that applies
   r.certification->uncertified = {2, 7};
   r.valid = false;
   CHECK(cad::failing_elements(r).why == cad::Failure::uncertified);
+  CHECK(cad::failing_elements(r).elements == std::vector<int>{2, 5, 7});  // every reason's elements
+  r.element_scaled_jacobian[5] = 0.3;
   CHECK(cad::failing_elements(r).elements == std::vector<int>{2, 7});
-  r.conformity.ok = false;  // a node off the CAD comes first, and blames no element
+  r.conformity.ok = false;  // a node off the CAD comes first, and blames no element of its own
   CHECK(cad::failing_elements(r).why == cad::Failure::off_cad);
-  CHECK(cad::failing_elements(r).elements.empty());
+  CHECK(cad::failing_elements(r).elements == std::vector<int>{2, 7});
   r.inverted = 2;  // inverted at quadrature points comes before everything
   r.element_valid[n - 1] = false;
   r.element_valid[3] = false;
   CHECK(cad::failing_elements(r).why == cad::Failure::inverted);
+  CHECK(cad::failing_elements(r).elements == std::vector<int>{2, 3, 7, n - 1});
+  r.certification.reset();
+  r.conformity.ok = true;
   CHECK(cad::failing_elements(r).elements == std::vector<int>{3, n - 1});
 
   const auto balls = cad::balls_around(valid.mesh, {3, n - 1});

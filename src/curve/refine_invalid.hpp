@@ -31,7 +31,10 @@ enum class Failure {
 
 struct FailingElements {
   Failure why = Failure::none;
-  std::vector<int> elements;  ///< ascending
+  /// Every element that fails for any reason (inverted, not certified, folded
+  /// at a node), ascending: a refinement around only the first reason's
+  /// elements would leave the others for another try.
+  std::vector<int> elements;
 };
 
 /// det D phi <= 0 at a node of element `e` (the result's scaled Jacobian there);
@@ -49,27 +52,23 @@ int count_folded_at_nodes(const CurveResult<MeshT>& r) {
   return n;
 }
 
-/// The elements that make `r` invalid, and why.
+/// The elements that make `r` invalid, and why (the first reason that applies).
 template <class MeshT>
 FailingElements failing_elements(const CurveResult<MeshT>& r) {
   FailingElements f;
+  const bool uncertified = r.certification && !r.certification->certified();
   const int folded = count_folded_at_nodes(r);
-  if (r.valid && folded == 0) return f;
-  auto pick = [&](auto failing) {
-    for (int e = 0; e < r.mesh.num_elements(); ++e)
-      if (failing(e)) f.elements.push_back(e);
-  };
-  if (r.inverted > 0) {
-    f.why = Failure::inverted;
-    pick([&](int e) { return !r.element_valid[e]; });
-  } else if (!r.conformity.ok) {
-    f.why = Failure::off_cad;
-  } else if (r.certification && !r.certification->certified()) {
-    f.why = Failure::uncertified;
-    f.elements = r.certification->uncertified;  // ascending
-  } else {
-    f.why = Failure::folded_at_node;
-    pick([&](int e) { return folded_at_node(r, e); });
+  if (r.valid && !uncertified && folded == 0) return f;
+  f.why = r.inverted > 0         ? Failure::inverted
+          : !r.conformity.ok     ? Failure::off_cad
+          : uncertified          ? Failure::uncertified
+                                 : Failure::folded_at_node;
+  std::vector<bool> failing(std::size_t(r.mesh.num_elements()), false);
+  if (uncertified)
+    for (int e : r.certification->uncertified) failing[std::size_t(e)] = true;
+  for (int e = 0; e < r.mesh.num_elements(); ++e) {
+    const bool inverted = r.inverted > 0 && !r.element_valid[e];
+    if (failing[std::size_t(e)] || inverted || folded_at_node(r, e)) f.elements.push_back(e);
   }
   return f;
 }

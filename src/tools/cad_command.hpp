@@ -175,7 +175,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
     switch (failing.why) {
       case cad::Failure::inverted:
         std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; no mesh "
-                     "written\n", cmd, n, r.mesh.num_elements());
+                     "written\n", cmd, r.inverted, r.mesh.num_elements());
         break;
       case cad::Failure::off_cad:
         std::fprintf(stderr, "hom: %s: INVALID result: %s; no mesh written\n", cmd, r.conformity.problem.c_str());
@@ -184,7 +184,7 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
         std::fprintf(stderr,
                      "hom: %s: NOT CERTIFIED: %d of %d elements are not certified valid (det D phi_P may vanish "
                      "between quadrature points); no mesh written\n",
-                     cmd, n, r.mesh.num_elements());
+                     cmd, int(r.certification->uncertified.size()), r.mesh.num_elements());
         break;
       default:
         std::fprintf(stderr,
@@ -192,6 +192,9 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
                      "are valid: a fold at an element corner); no mesh written\n",
                      cmd, n);
     }
+    if (failing.why != cad::Failure::folded_at_node)
+      std::fprintf(stderr, "  %d elements fail in all (inverted, not certified or folded at a node)%s\n", n,
+                   n > 0 ? ":" : "");
     print_failing_elements(r, failing.elements);
     if (retry) *retry = cad::balls_around(r.mesh, failing.elements);
   } else {

@@ -116,11 +116,14 @@ SurfaceNormals surface_normals(const Tabulation<Family>& tab, const G& g,
   SurfaceNormals r;
   const int nq = tab.num_points();
   r.points.resize(3, nq);
+  r.nodes = nodal_unit_normals(g, UV);
+  const std::vector<bool> regular = nodes_with_normal(r.nodes);
   // A pole's free parameter follows the element (parameters_at_poles), or the
   // quadrature points near it would take the normal of the surface's far side.
-  const Eigen::Matrix<double, 2, Eigen::Dynamic> uq = parameters_at_poles(g, UV) * tab.shape_values.transpose();
+  const Eigen::Matrix<double, 2, Eigen::Dynamic> uq =
+      parameters_at_poles(g, UV, regular) * tab.shape_values.transpose();
   for (int q = 0; q < nq; ++q) r.points.col(q) = unit_normal(g, Eigen::Vector2d(uq.col(q)));
-  r.nodes = element_unit_normals(g, UV);
+  fill_degenerate_normals(g, UV, regular, r.nodes);
   return r;
 }
 

@@ -561,17 +561,9 @@ class SurfaceOptimizationProblem {
     const int n = nodes_per_element();
     Eigen::Matrix2Xd Ue(2, n);
     for (int i = 0; i < n; ++i) Ue.col(i) = U.col(elements_(i, e));
-    std::vector<bool> has_normal(std::size_t(n), false);
     Eigen::Matrix3Xd ne(3, n);
-    for (int i = 0; i < n; ++i) {
-      ne.col(i) = nu.col(elements_(i, e));
-      has_normal[std::size_t(i)] = ne.col(i).squaredNorm() > 0.0;
-    }
-    if (std::find(has_normal.begin(), has_normal.end(), false) != has_normal.end()) {
-      const Eigen::Vector2d mean = mean_parameters(surface_, Ue, has_normal);  // of the nodes with a normal
-      for (int i = 0; i < n; ++i)
-        if (!has_normal[std::size_t(i)]) ne.col(i) = unit_normal_from(surface_, Eigen::Vector2d(Ue.col(i)), mean);
-    }
+    for (int i = 0; i < n; ++i) ne.col(i) = nu.col(elements_(i, e));
+    fill_degenerate_normals(surface_, Ue, nodes_with_normal(ne), ne);
     Eigen::Matrix3Xd r = ne * tab_->shape_values.transpose();
     normalize_or_zero(r);
     return r;

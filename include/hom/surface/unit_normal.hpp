@@ -98,46 +98,66 @@ Eigen::Vector2d mean_parameters(const Surface& surface, const Eigen::Ref<const E
   return mean_parameters(surface, UV, std::vector<bool>(std::size_t(UV.cols()), true));
 }
 
-/// UV (2 x n) with the free parameters of each node at a degenerate point (a
-/// pole, a cone's apex) set to the mean of the other nodes' (those with a
-/// normal), and periodic parameters unwrapped next to the first of those:
-/// the same points, but parameters that follow the element, so that
-/// interpolating them (the normals at the quadrature points) does. (An
-/// unwrapping next to the pole node's arbitrary angle could send the
-/// element the long way round.)
+/// unit_normal at each node of an element with parameters UV (2 x n): zero
+/// at the nodes at a degenerate point (fill_degenerate_normals completes them).
 template <SurfaceGeometry Surface>
-Eigen::Matrix2Xd parameters_at_poles(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV) {
-  std::vector<bool> has_normal(std::size_t(UV.cols()), false);
-  for (Eigen::Index i = 0; i < UV.cols(); ++i)
-    has_normal[std::size_t(i)] = unit_normal(surface, Eigen::Vector2d(UV.col(i))).squaredNorm() > 0.0;
+Eigen::Matrix3Xd nodal_unit_normals(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV) {
+  Eigen::Matrix3Xd nu(3, UV.cols());
+  for (Eigen::Index i = 0; i < UV.cols(); ++i) nu.col(i) = unit_normal(surface, Eigen::Vector2d(UV.col(i)));
+  return nu;
+}
+
+/// Which columns of nu (3 x n, nodal_unit_normals) are normals, not the zero
+/// of a degenerate point.
+inline std::vector<bool> nodes_with_normal(const Eigen::Ref<const Eigen::Matrix3Xd>& nu) {
+  std::vector<bool> regular(std::size_t(nu.cols()));
+  for (Eigen::Index i = 0; i < nu.cols(); ++i) regular[std::size_t(i)] = nu.col(i).squaredNorm() > 0.0;
+  return regular;
+}
+
+/// UV (2 x n) with the free parameters of each node at a degenerate point (a
+/// pole, a cone's apex; `regular` false there, nodes_with_normal) set to the
+/// mean of the regular nodes', and periodic parameters unwrapped next to the
+/// first regular node: the same points, but parameters that follow the
+/// element, so that interpolating them (the normals at the quadrature points)
+/// does. (An unwrapping next to the pole node's arbitrary angle could send
+/// the element the long way round.) UV itself where every node or none is regular.
+template <SurfaceGeometry Surface>
+Eigen::Matrix2Xd parameters_at_poles(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV,
+                                     const std::vector<bool>& regular) {
   Eigen::Matrix2Xd U = UV;
-  if (std::find(has_normal.begin(), has_normal.end(), false) == has_normal.end()) return U;
-  const auto first = std::find(has_normal.begin(), has_normal.end(), true);
-  if (first == has_normal.end()) return U;
-  const Eigen::Vector2d ref = UV.col(first - has_normal.begin());
-  const Eigen::Vector2d mean = mean_parameters(surface, UV, has_normal);
+  const auto first = std::find(regular.begin(), regular.end(), true);
+  const bool all_regular = std::find(regular.begin(), regular.end(), false) == regular.end();
+  if (first == regular.end() || all_regular) return U;
+  const Eigen::Vector2d ref = UV.col(first - regular.begin());
+  const Eigen::Vector2d mean = mean_parameters(surface, UV, regular);
   for (Eigen::Index i = 0; i < UV.cols(); ++i) {
-    const auto free = has_normal[std::size_t(i)] ? std::array<bool, 2>{false, false}
-                                                 : detail::free_parameters(surface, Eigen::Vector2d(UV.col(i)));
+    const auto free = regular[std::size_t(i)] ? std::array<bool, 2>{false, false}
+                                              : detail::free_parameters(surface, Eigen::Vector2d(UV.col(i)));
     for (int k = 0; k < 2; ++k) U(k, i) = surface.range(k).unwrap(free[k] ? mean[k] : UV(k, i), ref[k]);
   }
   return U;
+}
+
+/// Replaces the zero columns of nu (3 x n, the normals at the nodes of an
+/// element with parameters UV; `regular` = nodes_with_normal(nu)) by the
+/// limit from inside the element (unit_normal_from), in the direction of
+/// the mean parameters of its regular nodes.
+template <SurfaceGeometry Surface>
+void fill_degenerate_normals(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV,
+                             const std::vector<bool>& regular, Eigen::Matrix3Xd& nu) {
+  if (std::find(regular.begin(), regular.end(), false) == regular.end()) return;
+  const Eigen::Vector2d mean = mean_parameters(surface, UV, regular);
+  for (Eigen::Index i = 0; i < UV.cols(); ++i)
+    if (!regular[std::size_t(i)]) nu.col(i) = unit_normal_from(surface, Eigen::Vector2d(UV.col(i)), mean);
 }
 
 /// unit_normal_from at each node of an element with parameters UV (2 x n),
 /// from the direction of the mean parameters of its nodes with a normal.
 template <SurfaceGeometry Surface>
 Eigen::Matrix3Xd element_unit_normals(const Surface& surface, const Eigen::Ref<const Eigen::Matrix2Xd>& UV) {
-  std::vector<bool> has_normal(std::size_t(UV.cols()), false);
-  Eigen::Matrix3Xd nu(3, UV.cols());
-  for (Eigen::Index i = 0; i < UV.cols(); ++i) {
-    nu.col(i) = unit_normal(surface, Eigen::Vector2d(UV.col(i)));
-    has_normal[std::size_t(i)] = nu.col(i).squaredNorm() > 0.0;
-  }
-  if (std::find(has_normal.begin(), has_normal.end(), false) == has_normal.end()) return nu;
-  const Eigen::Vector2d mean = mean_parameters(surface, UV, has_normal);
-  for (Eigen::Index i = 0; i < UV.cols(); ++i)
-    if (!has_normal[std::size_t(i)]) nu.col(i) = unit_normal_from(surface, Eigen::Vector2d(UV.col(i)), mean);
+  Eigen::Matrix3Xd nu = nodal_unit_normals(surface, UV);
+  fill_degenerate_normals(surface, UV, nodes_with_normal(nu), nu);
   return nu;
 }
 
