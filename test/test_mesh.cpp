@@ -477,6 +477,39 @@ Mesh<Simplex<3>> octahedron(double h, Tag tag) {
   add_boundary_facets(mesh, facets);
   return mesh;
 }
+// A linear tetrahedron mesh of the tetrahedra `tets` (each turned to
+// positive volume), whose faces that one tetrahedron alone has are boundary
+// facets, each on a surface of its own (tags 1, 2, ...).
+Mesh<Simplex<3>> tetrahedra_with_boundary(const Eigen::Matrix3Xd& x, std::vector<std::array<int, 4>> tets) {
+  Eigen::MatrixXi t(4, tets.size());
+  for (std::size_t e = 0; e < tets.size(); ++e) {
+    Eigen::Matrix3d j;
+    for (int k = 0; k < 3; ++k) j.col(k) = x.col(tets[e][k + 1]) - x.col(tets[e][0]);
+    if (j.determinant() < 0) std::swap(tets[e][0], tets[e][1]);
+    for (int k = 0; k < 4; ++k) t(k, e) = tets[e][k];
+  }
+  Mesh<Simplex<3>> mesh(1, x, t);
+  std::map<std::vector<int>, int> face_count;
+  for (const auto& tet : tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      std::vector<int> f;
+      for (int k = 0; k < 4; ++k)
+        if (k != skip) f.push_back(tet[k]);
+      std::sort(f.begin(), f.end());
+      ++face_count[f];
+    }
+  std::vector<std::pair<std::vector<int>, int>> facets;
+  for (const auto& [f, count] : face_count)
+    if (count == 1) facets.push_back({f, int(facets.size()) + 1});
+  add_boundary_facets(mesh, facets);
+  return mesh;
+}
+
+double total_volume(const Mesh<Simplex<3>>& mesh) {
+  double volume = 0;
+  for (int e = 0; e < mesh.num_elements(); ++e) volume += signed_volume(mesh, e) / 6;
+  return volume;
+}
 
 }  // namespace
 
@@ -661,29 +694,9 @@ TEST_CASE("split_flat_corners: a straight corner (two boundary edges opposite in
       0, 0, 0, 1, 0, -1, 1,   //
       1, 0, 0, 0, -1, 0, 1;
   const int node = 0, r1 = 3, s_apex = 6;
-  std::vector<std::array<int, 4>> tets = {{1, 2, 0, 3}, {1, 2, 3, 4}, {1, 2, 4, 5}, {1, 2, 5, 0},
-                                          {0, 1, r1, s_apex}, {0, 2, r1, s_apex}};
-  Eigen::MatrixXi t(4, tets.size());
-  for (std::size_t e = 0; e < tets.size(); ++e) {
-    Eigen::Matrix3d j;
-    for (int k = 0; k < 3; ++k) j.col(k) = x.col(tets[e][k + 1]) - x.col(tets[e][0]);
-    if (j.determinant() < 0) std::swap(tets[e][0], tets[e][1]);
-    for (int k = 0; k < 4; ++k) t(k, e) = tets[e][k];
-  }
-  Mesh<Simplex<3>> mesh(1, x, t);
-  std::map<std::vector<int>, int> face_count;
-  for (const auto& tet : tets)
-    for (int skip = 0; skip < 4; ++skip) {
-      std::vector<int> f;
-      for (int k = 0; k < 4; ++k)
-        if (k != skip) f.push_back(tet[k]);
-      std::sort(f.begin(), f.end());
-      ++face_count[f];
-    }
-  std::vector<std::pair<std::vector<int>, int>> facets;  // each on a surface of its own
-  for (const auto& [f, count] : face_count)
-    if (count == 1) facets.push_back({f, int(facets.size()) + 1});
-  add_boundary_facets(mesh, facets);
+  auto mesh = tetrahedra_with_boundary(x, {{1, 2, 0, 3}, {1, 2, 3, 4}, {1, 2, 4, 5}, {1, 2, 5, 0},
+                                           {0, 1, r1, s_apex}, {0, 2, r1, s_apex}});
+  const std::size_t facets = mesh.boundary_facets().size();
   const auto on_boundary = detail::boundary_edge_facets(mesh);
   auto boundary = [&](int i, int j) { return on_boundary.count(detail::mesh_edge(i, j)) > 0; };
   REQUIRE(boundary(node, 1));
@@ -721,12 +734,74 @@ TEST_CASE("split_flat_corners: a straight corner (two boundary edges opposite in
   CHECK(s.edges_split >= 1);
   CHECK(mesh.num_elements() > before);
   CHECK(find_flat_corners(mesh, fillet).empty());
-  double volume = 0;
-  for (int e = 0; e < mesh.num_elements(); ++e) {
-    CHECK(signed_volume(mesh, e) > 0);
-    volume += signed_volume(mesh, e) / 6;
-  }
-  CHECK(volume == doctest::Approx(4.0 / 3.0 + 2.0 / 6.0));  // the octahedron and the two outer tetrahedra
-  CHECK(mesh.boundary_facets().size() == facets.size());
+  for (int e = 0; e < mesh.num_elements(); ++e) CHECK(signed_volume(mesh, e) > 0);
+  CHECK(total_volume(mesh) == doctest::Approx(4.0 / 3.0 + 2.0 / 6.0));  // the octahedron, the two outer tetrahedra
+  CHECK(mesh.boundary_facets().size() == facets);
+  check_facet_owners(mesh);
+}
+
+TEST_CASE("split_flat_corners: a corner whose boundary edges turn the other way in the tangent plane is split") {
+  // At a fuselage's tail tip, thinner than the elements, two boundary edges
+  // from node a (under the tail, on the cylinder y^2 + z^2 = 1 with normal
+  // (0, -1, 0) at a) go round to b and c on its top and bottom; b-c is a
+  // boundary edge too (on a symmetry plane), face a-b-c is interior. The
+  // tetrahedron (a, d1, b, c) is positive, but the chords a-b, a-c
+  // projected onto the tangent plane turn the other way round about a-d1:
+  // curved, its det D phi(a) < 0. Rings of three tetrahedra around a-d1 and
+  // a-d2 make those edges interior; a's boundary fan is b, e1, c, e2.
+  Eigen::Matrix3Xd x(3, 7);
+  x << 0, -0.3, -0.3, -1, 0.6, -1.2, 1.2,  // a b c d1 d2 e1 e2
+      -1, 0, 0, -0.3, -0.4, -1, -1,        //
+      0, 1, -1, 0, 0, 0, 0;
+  const int a = 0, b = 1, c = 2, d1 = 3, d2 = 4, e1 = 5, e2 = 6;
+  auto mesh = tetrahedra_with_boundary(
+      x, {{a, d1, b, c}, {a, d1, c, e1}, {a, d1, e1, b}, {a, d2, b, c}, {a, d2, c, e2}, {a, d2, e2, b}});
+  const auto on_boundary = detail::boundary_edge_facets(mesh);
+  auto boundary = [&](int i, int j) { return on_boundary.count(detail::mesh_edge(i, j)) > 0; };
+  REQUIRE(boundary(a, b));
+  REQUIRE(boundary(a, c));
+  REQUIRE(boundary(b, c));
+  REQUIRE(!boundary(a, d1));
+  REQUIRE(!boundary(a, d2));
+  REQUIRE(detail::interior_face(mesh.boundary_facets(), on_boundary, a, b, c));
+  const Eigen::Vector3d n(0, -1, 0);
+  const EntityNormal<3> cylinder = [&](int, int i) -> std::optional<Eigen::Vector3d> {
+    if (i == a) return n;
+    return std::nullopt;
+  };
+  CHECK(find_flat_corners(mesh).empty());
+  const auto corners = find_flat_corners(mesh, cylinder);
+  REQUIRE(corners.size() == 1);
+  const auto& corner = corners.front();
+  std::set<int> folded;
+  for (int k = 0; k < 4; ++k) folded.insert(mesh.vertex(corner.element, k));
+  CHECK(folded == std::set<int>{a, b, c, d1});
+  CHECK(mesh.vertex(corner.element, corner.vertex) == a);
+  CHECK(std::set<int>{mesh.vertex(corner.element, corner.split_from), mesh.vertex(corner.element, corner.split_to)} ==
+        std::set<int>{b, c});
+  // The tangents of the curved edges a-b, a-c at a (the cylinder's helices
+  // through them) make det D phi(a) < 0 with a-d1 straight, as claimed.
+  auto helix_tangent = [&](int end) {
+    const double turn = std::atan2(x(2, end), -x(1, end));  // the angle round the axis from a
+    return Eigen::Vector3d(x(0, end), 0, turn);
+  };
+  const Eigen::Vector3d ad1 = x.col(d1) - x.col(a);
+  const double linear = (x.col(b) - x.col(a)).cross(Eigen::Vector3d(x.col(c) - x.col(a))).dot(ad1);
+  CHECK(linear * helix_tangent(b).cross(helix_tangent(c)).dot(ad1) < 0);
+
+  const double volume = total_volume(mesh);
+  const std::size_t facets = mesh.boundary_facets().size();
+  const auto s = split_flat_corners(mesh, cylinder);
+  CHECK(s.faces_split == 1);
+  CHECK(s.edges_split == 0);
+  CHECK(s.centroid_splits == 0);
+  CHECK(mesh.num_elements() == 6 + 4);  // both tetrahedra on a-b-c into three
+  CHECK(mesh.num_nodes() == 8);
+  CHECK(mesh.node(7).isApprox((x.col(a) + x.col(b) + x.col(c)) / 3));
+  CHECK(mesh.node_classes()[7].kind == NodeKind::free);
+  CHECK(find_flat_corners(mesh, cylinder).empty());
+  for (int e = 0; e < mesh.num_elements(); ++e) CHECK(signed_volume(mesh, e) > 0);
+  CHECK(total_volume(mesh) == doctest::Approx(volume));
+  CHECK(mesh.boundary_facets().size() == facets);
   check_facet_owners(mesh);
 }

@@ -175,7 +175,8 @@ class Pipeline {
       if (s.corners > 0)
         say("linear mesh: " + std::to_string(s.corners) + " flat corners (every edge there on one CAD " +
             (volume ? "face" : "curve") + ", or on nearly coplanar or tangent ones): " +
-            std::to_string(s.edges_split) + " interior edges split, " + std::to_string(s.centroid_splits) +
+            std::to_string(s.edges_split) + " interior edges split, " + std::to_string(s.faces_split) +
+            " interior faces split, " + std::to_string(s.centroid_splits) +
             " elements split at their centroid; " + std::to_string(out.num_elements()) + " elements");
     }
     return out;

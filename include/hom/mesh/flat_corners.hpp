@@ -26,6 +26,9 @@
 /// the orientation). Where every edge of the element is a boundary edge (a
 /// tetrahedron with three or four faces on the boundary, as at a thin
 /// trailing edge), the element alone is split at its centroid into d + 1.
+/// A straight corner (FlatCorner) whose two boundary edges' far ends are
+/// joined by a boundary edge has its interior face through the three split
+/// at its centre instead, with both tetrahedra on it.
 /// Afterwards every corner of the new elements has an edge to the new,
 /// interior node, so none is flat; the boundary facets keep their vertices
 /// (the split edge is on none; a centroid split keeps the facets). The
@@ -91,14 +94,21 @@ Eigen::Matrix<double, D, 1> facet_normal(const Mesh<Simplex<D>, Nodes, D>& mesh,
 ///
 /// A straight corner (tetrahedra, with EntityNormal): two edges from vertex
 /// `vertex` lie on the boundary, on entities with one tangent plane there,
-/// and point to opposite sides in it (their chords projected onto the plane
-/// are within flat_corner_max_angle of antiparallel). Curved, both end
-/// tangent to the plane, antiparallel, so det D phi = 0 at the corner (the
-/// element's angle there is 180 degrees), whatever its third edge does. This
-/// happens where an element's edge spans a fillet narrower than the elements
-/// and its neighbour continues on the face beyond the fillet's seam. Local
-/// vertices `split_from` and `split_to` are the two edges' other ends: the
-/// edge between them, interior, is the one to split.
+/// and their chords projected onto the plane either point to opposite sides
+/// (within flat_corner_max_angle of antiparallel) or turn the other way
+/// round than the chords themselves. Curved, both edges end tangent to the
+/// plane, along the projected chords, so det D phi at the corner is zero (an
+/// angle of 180 degrees) or has the sign opposite to the straight element's,
+/// whatever its third, interior edge does: the sign of det D phi there is
+/// that of (t_b x t_c) . t_d, and the curved t_b, t_c are set by the
+/// boundary. The first happens where an element's edge spans a fillet
+/// narrower than the elements and its neighbour continues on the face beyond
+/// the fillet's seam; the second where two edges go round a body thinner
+/// than the elements (a fuselage's tail tip) to its far side. Local vertices
+/// `split_from` and `split_to` are the two edges' other ends: the edge
+/// between them is split if it is interior, else the face (vertex,
+/// split_from, split_to), which is then interior, at its centre. Either
+/// leaves each new element at the corner with one edge on the boundary.
 struct FlatCorner {
   int element = 0;
   int vertex = 0;
@@ -158,8 +168,21 @@ std::optional<Eigen::Matrix<double, D, 1>> tangent_normal(const std::vector<Boun
   return normals.front();
 }
 
+/// Whether mesh nodes a, b, c make a face that is not a boundary facet (so
+/// two tetrahedra share it): either b-c is interior, or none of its facets
+/// has a.
+inline bool interior_face(const std::vector<BoundaryFacet<Simplex<3>>>& facets,
+                          const std::map<MeshEdge, std::vector<int>>& on_boundary, int a, int b, int c) {
+  const auto it = on_boundary.find(mesh_edge(b, c));
+  if (it == on_boundary.end()) return true;
+  return std::none_of(it->second.begin(), it->second.end(), [&](int k) {
+    return std::find(facets[k].vertices.begin(), facets[k].vertices.end(), a) != facets[k].vertices.end();
+  });
+}
+
 /// The straight corner at vertex a of tetrahedron e (see FlatCorner), if it
-/// has one whose opposite edge is interior.
+/// has one whose face opposite its interior edge is interior (a face on the
+/// boundary would leave nothing to split).
 template <NodeSet Nodes>
 std::optional<FlatCorner> straight_corner(const Mesh<Simplex<3>, Nodes, 3>& mesh, int e, int a,
                                           const std::map<MeshEdge, std::vector<int>>& on_boundary,
@@ -174,21 +197,20 @@ std::optional<FlatCorner> straight_corner(const Mesh<Simplex<3>, Nodes, 3>& mesh
     ends.push_back(b);
     around.insert(around.end(), it->second.begin(), it->second.end());
   }
-  if (ends.size() < 2) return std::nullopt;
+  if (ends.size() != 2) return std::nullopt;  // three: a flat corner of the first kind, if any
+  const int b = ends[0], c = ends[1], d = 6 - a - b - c;
+  if (!interior_face(facets, on_boundary, node, mesh.vertex(e, b), mesh.vertex(e, c))) return std::nullopt;
   const auto tangent = tangent_normal(facets, around, node, normal, min_cos);
   if (!tangent) return std::nullopt;
   const Eigen::Vector3d n = *tangent;
-  auto in_plane = [&](int b) -> Eigen::Vector3d {
-    const Eigen::Vector3d chord = mesh.node(mesh.vertex(e, b)) - mesh.node(node);
-    return (chord - chord.dot(n) * n).normalized();
-  };
-  for (std::size_t i = 0; i < ends.size(); ++i)
-    for (std::size_t j = i + 1; j < ends.size(); ++j) {
-      const int b = ends[i], c = ends[j];
-      if (on_boundary.count(mesh_edge(mesh.vertex(e, b), mesh.vertex(e, c)))) continue;
-      if (in_plane(b).dot(in_plane(c)) <= -min_cos) return FlatCorner{e, a, facets[around.front()].entity_tag, b, c};
-    }
-  return std::nullopt;
+  auto chord = [&](int k) -> Eigen::Vector3d { return mesh.node(mesh.vertex(e, k)) - mesh.node(node); };
+  auto in_plane = [&](int k) -> Eigen::Vector3d { return (chord(k) - chord(k).dot(n) * n).normalized(); };
+  const bool straight = in_plane(b).dot(in_plane(c)) <= -min_cos;
+  const double linear = chord(b).cross(chord(c)).dot(chord(d));
+  const double curved = in_plane(b).cross(in_plane(c)).dot(chord(d));
+  const bool folded = linear * curved < 0.0;
+  if (!straight && !folded) return std::nullopt;
+  return FlatCorner{e, a, facets[around.front()].entity_tag, b, c};
 }
 
 }  // namespace detail
@@ -249,6 +271,7 @@ std::vector<FlatCorner> find_flat_corners(const Mesh<Simplex<D>, Nodes, D>& mesh
 struct FlatCornerSplit {
   int corners = 0;      ///< flat corners found
   int edges_split = 0;     ///< edges split (each adds one node)
+  int faces_split = 0;     ///< interior faces split at their centre (each adds one node)
   int centroid_splits = 0; ///< elements split at their centroid (each adds one node)
 };
 
@@ -321,6 +344,31 @@ FlatCornerSplit split_flat_corners_once(Mesh<Simplex<D>, Nodes, D>& mesh, const 
     }
     ++out.centroid_splits;
   };
+  // Face (a, b, c) of a tetrahedron, interior, split at its centre g with
+  // both tetrahedra on it, each into three: child k has vertex k of the face
+  // replaced by g (at its place, which keeps the orientation), and a
+  // facet owned by the parent goes to the child that keeps all its vertices.
+  auto split_face = [&](int a, int b, int c) {
+    const int g = int(x.size());
+    x.push_back((x[a] + x[b] + x[c]) / 3.0);
+    const std::size_t before = elements.size();
+    for (std::size_t e = 0; e < before; ++e) {
+      if (!has(elements[e], a) || !has(elements[e], b) || !has(elements[e], c)) continue;
+      if (node_classes.size() == std::size_t(g))
+        node_classes.push_back(NodeClass{NodeKind::free, EntityId{D, entities[e]}, 0, {}});
+      const auto parent = elements[e];
+      for (int v : {b, c}) {
+        elements.push_back(parent);
+        std::replace(elements.back().begin(), elements.back().end(), v, g);
+        entities.push_back(entities[e]);
+        for (auto& f : facets)
+          if (f.element == int(e) && !std::count(f.vertices.begin(), f.vertices.end(), v))
+            f.element = int(elements.size()) - 1;
+      }
+      std::replace(elements[e].begin(), elements[e].end(), a, g);
+    }
+    ++out.faces_split;
+  };
   // Every corner that is still flat when its turn comes (a split around
   // another corner may have removed it): the new elements have none.
   for (const auto& c : corners) {
@@ -329,6 +377,11 @@ FlatCornerSplit split_flat_corners_once(Mesh<Simplex<D>, Nodes, D>& mesh, const 
     for (int k = 0; k <= D; ++k) untouched = untouched && el[k] == mesh.vertex(c.element, k);
     if (!untouched) continue;
     if (c.split_from >= 0) {
+      if constexpr (D == 3)
+        if (on_boundary.count(detail::mesh_edge(el[c.split_from], el[c.split_to]))) {
+          split_face(el[c.vertex], el[c.split_from], el[c.split_to]);
+          continue;
+        }
       split(el[c.split_from], el[c.split_to]);
       continue;
     }
@@ -384,6 +437,7 @@ FlatCornerSplit split_flat_corners(Mesh<Simplex<D>, Nodes, D>& mesh, const Entit
     const auto s = detail::split_flat_corners_once(mesh, normal);
     total.corners += s.corners;
     total.edges_split += s.edges_split;
+    total.faces_split += s.faces_split;
     total.centroid_splits += s.centroid_splits;
     if (s.corners == 0) break;
   }
