@@ -504,6 +504,11 @@ std::vector<Case> all_cases(const fs::path& data) {
                      return o;
                    },
                    {4}, {2}, {}});
+  // A sharp apex (a fuselage's tail tip): near it the cone is thinner than
+  // the elements, and tetrahedra whose boundary edges go round it fold at a
+  // node unless split first (mesh/flat_corners.hpp).
+  cases.push_back({"cone", [] { return hom::cad::cone_model(3.0, 10.0); }, Kind::volume,
+                   [](const hom::cad::CadModel&) { return sized(0.5); }, {3, 5}, {3}, {}});
   // Real CAD (../shared/data/cad), default sizes (model size / 20) unless noted.
   auto file = [data](const std::string& f) { return [path = (data / f).string()] { return hom::cad::read_cad(path); }; };
   auto relative = [](double fraction, int curvature = 0) {

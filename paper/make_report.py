@@ -140,9 +140,10 @@ FULL = [
     dict(name="curve_p10", binary="bench_curve", args=["--case", "gear", "--p", "10", "--certify"],
          conditions="the gear at p = 10 (tables 5.5, 5.6)"),
     dict(name="curve_models", binary="bench_curve", args=["--case", "propeller_surface", "--case", "propeller",
-                                                          "--case", "wing_domain", "--certify", "--refine-invalid",
-                                                          "3"], timeout=4 * 3600,
-         conditions="the propeller-like part and the wing's exterior domain (curve_models.hpp); an invalid or "
+                                                          "--case", "wing_domain", "--case", "cone", "--certify",
+                                                          "--refine-invalid", "3"], timeout=4 * 3600,
+         conditions="the propeller-like part, the wing's exterior domain and a cone's sharp apex "
+                    "(curve_models.hpp); an invalid or "
                     "uncertified result meshed again finer around its failing elements, up to 3 times "
                     "(--refine-invalid 3; the statistics are the last mesh's)"),
     dict(name="curve_cad", binary="bench_curve", args=["--case", "wing_fuselage", "--case", "ring_in_sphere", "--case",

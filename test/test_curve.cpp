@@ -182,6 +182,42 @@ TEST_CASE("curved cube with a spherical cavity at p = 2 and 3: valid, boundary o
   }
 }
 
+TEST_CASE("a cone's sharp apex at p = 3: the folds where it is thinner than the elements split, certified valid") {
+  // Near the apex the cone is thinner than the elements: a tetrahedron's
+  // two boundary edges from a node go round it, and curved on it they turn
+  // the other way round than their chords (det D phi < 0 at the node,
+  // whatever the free nodes do) unless the interior face between them is
+  // split first (mesh/flat_corners.hpp). The apex's normal is the cone's
+  // at each element's own angle around the axis (surface/unit_normal.hpp).
+  const auto m = cad::cone_model(3.0, 10.0);
+  REQUIRE(m.num_faces() == 2);
+  cad::CadMeshOptions mo;
+  mo.size = 2.0;
+  const auto linear = cad::mesh_cad<Simplex<3>>(m, mo);
+  auto o = options(3);
+  o.certify = true;
+  const auto r = cad::curve_mesh<Simplex<3>, 3>(m, linear, o);
+  CHECK(r.flat_corners.faces_split > 0);
+  CHECK(r.mesh.num_elements() > linear.num_elements());
+  CHECK(r.valid);
+  CHECK(r.inverted == 0);
+  REQUIRE(r.certification);
+  CHECK(r.certification->certified());
+  CHECK(cad::failing_elements(r).elements.empty());
+  check_nodes_on_cad(r.mesh, m, 1e-10 * m.size());
+  // The conical face's nodes on the cone (exact geometry): at height z the
+  // radius is 3 (1 - z / 10).
+  int on_cone = 0;
+  for (int i = 0; i < r.mesh.num_nodes(); ++i) {
+    const auto& c = r.mesh.node_class(i);
+    if (!c.entity || c.entity->dim != 2 || m.surface(c.entity->tag).type() != "cone") continue;
+    const Eigen::Vector3d x = r.mesh.node(i);
+    CHECK(x.head<2>().norm() == doctest::Approx(3.0 * (1.0 - x[2] / 10.0)).epsilon(1e-9));
+    ++on_cone;
+  }
+  CHECK(on_cone > 0);
+}
+
 TEST_CASE("planar plate with holes: edge nodes at Gauss-Lobatto positions in arc length, valid") {
   const auto m = cad::plate_with_holes_model();
   REQUIRE(m.num_faces() == 1);
@@ -297,7 +333,7 @@ TEST_CASE("certify: the planar pipeline's certificate is the result's, and decid
   check_nodes_on_cad(r.mesh, m, 1e-10 * m.size());
 }
 
-TEST_CASE("refine_invalid: the failing elements by the first reason that applies, a ball around each") {
+TEST_CASE("refine_invalid: every failing element, why by the first reason that applies, a ball around each") {
   const auto m = cad::plate_with_holes_model();
   const auto linear = planar_triangles(m, 0.9);
   const auto valid = cad::curve_mesh<Simplex<2>, 2>(m, linear, options(2));

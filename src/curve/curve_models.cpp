@@ -18,6 +18,7 @@
 #include <BRepFilletAPI_MakeFillet2d.hxx>
 #include <BRepOffsetAPI_ThruSections.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakePrism.hxx>
 #include <BRep_Tool.hxx>
@@ -224,6 +225,12 @@ CadModel wing_domain_model(double thickness) {
     if (!cut.IsDone()) throw std::runtime_error("hom::cad::wing_domain_model: cutting the wing from the box failed");
     return cut.Shape();
   });
+}
+
+CadModel cone_model(double radius, double height) {
+  if (!(radius > 0.0) || !(height > 0.0))
+    throw std::invalid_argument("hom::cad::cone_model: radius and height must be > 0");
+  return built("cone", [&] { return BRepPrimAPI_MakeCone(gp_Ax2(gp::Origin(), gp::DZ()), radius, 0.0, height).Shape(); });
 }
 
 std::optional<PlanarPlacement> place_in_xy_plane(const CadModel& cad, double tolerance) {

@@ -53,6 +53,11 @@ CadModel propeller_model(int blades = 3);
 /// loft surfaces that meet at the leading edge and at the sharp trailing edge.
 CadModel wing_domain_model(double thickness = 0.12);
 
+/// A solid cone along z with its base of radius `radius` at z = 0 and its
+/// apex at z = `height` (a fuselage's tail tip, sharp): a conical face, whose
+/// parameterization is degenerate at the apex, and a disk.
+CadModel cone_model(double radius = 3.0, double height = 10.0);
+
 /// If every face of the model is planar and they lie in one plane, the model
 /// moved rigidly into z = 0 with that plane's normal along +z (a no-op for a
 /// model already there) and the transformation's description; std::nullopt

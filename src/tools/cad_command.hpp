@@ -57,14 +57,19 @@ inline double peak_rss_mb() {
 }
 
 /// Names the failing elements of an invalid result so that a user can find
-/// them: up to `limit` of `elements`, each with its index in the mesh (the
-/// linear mesh's element order), centroid, quality, scaled Jacobian and where
+/// them: up to `limit` of `elements`, the least scaled Jacobian first, each
+/// with its index in the mesh (the linear mesh's element order), centroid,
+/// quality, scaled Jacobian and where
 /// its nodes are: interior nodes move freely, nodes on a CAD face slide on it,
 /// nodes on CAD edges and vertices stay (a fold that only held nodes
 /// determine cannot be undone).
 template <class MeshT>
-void print_failing_elements(const cad::CurveResult<MeshT>& r, const std::vector<int>& elements, int limit = 5) {
+void print_failing_elements(const cad::CurveResult<MeshT>& r, std::vector<int> elements, int limit = 5) {
+  // The worst first (least scaled Jacobian), the ones a user looks at.
   const int listed = std::min(limit, int(elements.size()));
+  const auto& sj = r.element_scaled_jacobian;
+  std::partial_sort(elements.begin(), elements.begin() + listed, elements.end(),
+                    [&](int a, int b) { return std::pair(sj[a], a) < std::pair(sj[b], b); });
   for (int i = 0; i < listed; ++i) {
     const int e = elements[i];
     const auto x = r.mesh.element_coordinates(e);
@@ -192,9 +197,9 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
                      "are valid: a fold at an element corner); no mesh written\n",
                      cmd, n);
     }
-    if (failing.why != cad::Failure::folded_at_node)
-      std::fprintf(stderr, "  %d elements fail in all (inverted, not certified or folded at a node)%s\n", n,
-                   n > 0 ? ":" : "");
+    if (failing.why != cad::Failure::folded_at_node && n > 0)
+      std::fprintf(stderr, "  %d elements fail in all (inverted, not certified or folded at a node)%s:\n", n,
+                   n > 5 ? ", the 5 with the least scaled Jacobian" : "");
     print_failing_elements(r, failing.elements);
     if (retry) *retry = cad::balls_around(r.mesh, failing.elements);
   } else {
