@@ -56,15 +56,18 @@ inline double peak_rss_mb() {
   return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
 }
 
+/// How many failing elements an invalid result lists.
+inline constexpr int failing_elements_listed = 5;
+
 /// Names the failing elements of an invalid result so that a user can find
 /// them: up to `limit` of `elements`, the least scaled Jacobian first, each
 /// with its index in the mesh (the linear mesh's element order), centroid,
-/// quality, scaled Jacobian and where
-/// its nodes are: interior nodes move freely, nodes on a CAD face slide on it,
-/// nodes on CAD edges and vertices stay (a fold that only held nodes
-/// determine cannot be undone).
+/// quality, scaled Jacobian and where its nodes are: interior nodes move
+/// freely, nodes on a CAD face slide on it, nodes on CAD edges and vertices
+/// stay (a fold that only held nodes determine cannot be undone).
 template <class MeshT>
-void print_failing_elements(const cad::CurveResult<MeshT>& r, std::vector<int> elements, int limit = 5) {
+void print_failing_elements(const cad::CurveResult<MeshT>& r, std::vector<int> elements,
+                            int limit = failing_elements_listed) {
   // The worst first (least scaled Jacobian), the ones a user looks at.
   const int listed = std::min(limit, int(elements.size()));
   const auto& sj = r.element_scaled_jacobian;
@@ -197,9 +200,14 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
                      "are valid: a fold at an element corner); no mesh written\n",
                      cmd, n);
     }
-    if (failing.why != cad::Failure::folded_at_node && n > 0)
+    if (failing.why != cad::Failure::folded_at_node && n > 0) {
+      const std::string worst = n > failing_elements_listed
+                                    ? ", the " + std::to_string(failing_elements_listed) +
+                                          " with the least scaled Jacobian"
+                                    : "";
       std::fprintf(stderr, "  %d elements fail in all (inverted, not certified or folded at a node)%s:\n", n,
-                   n > 5 ? ", the 5 with the least scaled Jacobian" : "");
+                   worst.c_str());
+    }
     print_failing_elements(r, failing.elements);
     if (retry) *retry = cad::balls_around(r.mesh, failing.elements);
   } else {

@@ -205,9 +205,10 @@ std::optional<FlatCorner> straight_corner(const Mesh<Simplex<3>, Nodes, 3>& mesh
   const Eigen::Vector3d n = *tangent;
   auto chord = [&](int k) -> Eigen::Vector3d { return mesh.node(mesh.vertex(e, k)) - mesh.node(node); };
   auto in_plane = [&](int k) -> Eigen::Vector3d { return (chord(k) - chord(k).dot(n) * n).normalized(); };
-  const bool straight = in_plane(b).dot(in_plane(c)) <= -min_cos;
+  const Eigen::Vector3d u = in_plane(b), v = in_plane(c);  // the curved edges' directions at the corner
+  const bool straight = u.dot(v) <= -min_cos;
   const double linear = chord(b).cross(chord(c)).dot(chord(d));
-  const double curved = in_plane(b).cross(in_plane(c)).dot(chord(d));
+  const double curved = u.cross(v).dot(chord(d));
   const bool folded = linear * curved < 0.0;
   if (!straight && !folded) return std::nullopt;
   return FlatCorner{e, a, facets[around.front()].entity_tag, b, c};
