@@ -229,7 +229,9 @@ class Runner {
       try {
         auto linear = first_linear;
         double t_mesh = t_first_mesh;
-        auto r = hom::cad::curve_mesh<F, S>(cad, linear, o);
+        auto first = o;
+        first.skip_volume_if_faces_uncertified = s_.refine_invalid > 0;  // tries remain (curve_mesh.hpp)
+        auto r = hom::cad::curve_mesh<F, S>(cad, linear, first);
         const int tries = refine_invalid<F, S>(cad, mo, o, linear, t_mesh, r);
         report(c, cad, std::string(F::name), p, r.stages, t_mesh, tries);
         int corners = 0;
@@ -267,14 +269,21 @@ class Runner {
     }
   }
 
+  static const char* skipped(const hom::cad::FailingElements& failing) {
+    return failing.why == hom::cad::Failure::faces_uncertified ? " (on uncertified CAD faces, volume stage skipped)"
+                                                                : "";
+  }
+
   /// --refine-invalid N: while `r` is invalid and tries are left, the model is
   /// meshed again finer around its failing elements (balls of the earlier
   /// tries kept; src/curve/refine_invalid.hpp) and curved again, as hom
   /// curve --refine-invalid does. `linear`, `t_mesh` and `r` become the last
   /// try's. A try whose meshing fails (Gmsh) ends the tries with the last
-  /// curved one's result. Returns the number of tries (1: the first mesh).
+  /// curved one's result. A try with tries after it skips its volume stage
+  /// when its CAD faces are left uncertified (curve_mesh.hpp). Returns the
+  /// number of tries (1: the first mesh).
   template <hom::ElementFamily F, int S>
-  int refine_invalid(const hom::cad::CadModel& cad, hom::cad::CadMeshOptions mo, const hom::cad::CurveOptions& o,
+  int refine_invalid(const hom::cad::CadModel& cad, hom::cad::CadMeshOptions mo, hom::cad::CurveOptions o,
                      hom::cad::CurvedMesh<F, S>& linear, double& t_mesh,
                      hom::cad::CurveResult<hom::cad::CurvedMesh<F, S>>& r) {
     int tries = 1;
@@ -287,16 +296,17 @@ class Runner {
       try {
         linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
       } catch (const hom::cad::MeshingError& e) {
-        std::printf("   p = %d: %d elements fail; try %d: meshing failed (%s); the result stands at try %d's\n", o.p,
-                    int(failing.elements.size()), tries + 1, e.what(), tries);
+        std::printf("   p = %d: %d elements fail%s; try %d: meshing failed (%s); the result stands at try %d's\n", o.p,
+                    int(failing.elements.size()), skipped(failing), tries + 1, e.what(), tries);
         break;
       }
       t_mesh = hom::bench::seconds_since(t0);
-      std::printf("   p = %d: %d elements fail; try %d: the model meshed again finer around them (size floor %.3g), "
+      std::printf("   p = %d: %d elements fail%s; try %d: the model meshed again finer around them (size floor %.3g), "
                   "%d elements, %d nodes (Gmsh, %.2f s)\n",
-                  o.p, int(failing.elements.size()), tries + 1, hom::cad::size_floor(mo), linear.num_elements(),
-                  linear.num_nodes(), t_mesh);
+                  o.p, int(failing.elements.size()), skipped(failing), tries + 1, hom::cad::size_floor(mo),
+                  linear.num_elements(), linear.num_nodes(), t_mesh);
       std::fflush(stdout);
+      o.skip_volume_if_faces_uncertified = tries < s_.refine_invalid;  // another try after this one
       r = hom::cad::curve_mesh<F, S>(cad, linear, o);
     }
     return tries;

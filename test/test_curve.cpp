@@ -498,6 +498,89 @@ TEST_CASE("certify: a surface element folded in its face's (u, v) is certified i
   CHECK_FALSE(bad.valid);
 }
 
+TEST_CASE("skip_volume_if_faces_uncertified: a CAD-face triangle folded, the volume stage skipped, its element blamed") {
+  const auto m = cad::cube_with_cavity_model();
+  cad::CadMeshOptions mo;
+  mo.size = 1.62;
+  for (int v = 1; v <= m.num_vertices(); ++v)
+    mo.vertex_sizes[v] = (m.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.3 : 1.62;
+  const auto linear = cad::mesh_cad<Simplex<3>>(m, mo);
+  const auto curved = cad::curve_mesh<Simplex<3>, 3>(m, linear, options(3));
+  REQUIRE(curved.valid);
+  cad::CurveOptions o = options(3);
+  o.certify = true;
+  o.optimize_surface = false;  // no surface optimization, so no repair of the face either
+  o.skip_volume_if_faces_uncertified = true;
+  o.max_iterations = 3;  // whether the volume stage runs is what counts here, not where it converges
+  const auto good = cad::optimize_on_cad<Simplex<3>, 3>(m, curved.mesh, o);
+  CHECK(good.volume_skipped_for.empty());  // certified faces: the volume stage runs
+  CHECK(good.stages.back().stage == "optimized");
+  REQUIRE(good.certification);
+  CHECK(good.valid == good.certification->certified());
+
+  // The face-interior node of a boundary triangle on one of the cube's planes
+  // (at p = 3 used by one tetrahedron only), pushed in (u, v) past a vertex
+  // of the triangle: the triangle folds on its CAD face.
+  std::vector<int> uses(curved.mesh.num_nodes(), 0);
+  for (int e = 0; e < curved.mesh.num_elements(); ++e)
+    for (int i = 0; i < curved.mesh.nodes_per_element(); ++i) ++uses[curved.mesh.elements()(i, e)];
+  int element = -1, node = -1, vertex = -1;
+  for (int e = 0; e < curved.mesh.num_elements() && element < 0; ++e)
+    for (int i = 0; i < curved.mesh.nodes_per_element() && element < 0; ++i) {
+      const int g = curved.mesh.elements()(i, e);
+      const auto& cl = curved.mesh.node_class(g);
+      if (uses[g] != 1 || !cl.entity || cl.entity->dim != 2 || cl.num_params != 2 ||
+          m.surface(cl.entity->tag).type() != "plane")
+        continue;
+      for (int v = 0; v < 4; ++v) {
+        const auto& cv = curved.mesh.node_class(curved.mesh.vertex(e, v));
+        if (cv.entity && cv.entity->dim == 2 && cv.entity->tag == cl.entity->tag && near_in_parameters(m, cl, cv)) {
+          element = e;
+          node = g;
+          vertex = curved.mesh.vertex(e, v);
+          break;
+        }
+      }
+    }
+  REQUIRE(element >= 0);
+  auto folded = curved.mesh;
+  auto& cl = folded.node_class(node);
+  const auto& cv = folded.node_class(vertex);
+  const auto s = m.surface(cl.entity->tag);
+  for (int a = 0; a < 2; ++a)
+    cl.params[a] = s.range(a).normalize(cv.params[a] + 1.5 * (cv.params[a] - cl.params[a]));
+  folded.node(node) = s.evaluate({cl.params[0], cl.params[1]});
+
+  const auto skipped = cad::optimize_on_cad<Simplex<3>, 3>(m, folded, o);
+  const auto& blamed = skipped.volume_skipped_for;
+  CHECK(std::find(blamed.begin(), blamed.end(), element) != blamed.end());
+  CHECK(std::is_sorted(blamed.begin(), blamed.end()));
+  CHECK(std::adjacent_find(blamed.begin(), blamed.end()) == blamed.end());
+  for (int e : blamed) {  // each has a boundary triangle: some node on a CAD face
+    bool on_face = false;
+    for (int i = 0; i < skipped.mesh.nodes_per_element(); ++i) {
+      const auto& c = skipped.mesh.node_class(skipped.mesh.elements()(i, e));
+      on_face = on_face || (c.entity && c.entity->dim == 2);
+    }
+    CHECK(on_face);
+  }
+  CHECK(int(blamed.size()) < skipped.mesh.num_elements() / 10);  // the fold's, not the whole mesh
+  CHECK_FALSE(skipped.valid);
+  CHECK_FALSE(skipped.certification);  // no volume certificate: that stage did not run
+  CHECK(skipped.stages.back().part == "volume");
+  CHECK(skipped.stages.back().stage == "initial");
+  const auto failing = cad::failing_elements(skipped);
+  CHECK(failing.why == cad::Failure::faces_uncertified);
+  CHECK(failing.elements == blamed);
+
+  o.skip_volume_if_faces_uncertified = false;  // the last try: the volume stage runs all the same
+  const auto ran = cad::optimize_on_cad<Simplex<3>, 3>(m, folded, o);
+  CHECK(ran.volume_skipped_for.empty());
+  CHECK(ran.stages.back().stage == "optimized");
+  CHECK(ran.certification);
+  CHECK(cad::failing_elements(ran).why != cad::Failure::faces_uncertified);
+}
+
 TEST_CASE("a mesh that does not fit the model is an error naming what is wrong") {
   const auto m = cad::plate_with_holes_model();
   auto linear = planar_triangles(m, 2.0);

@@ -279,7 +279,15 @@ class Pipeline {
       initial.time_s = planar ? t_boundary : 0.0;
       out.stages.push_back(initial);
       say(std::string(part()) + ", initial curved: " + row(initial));
-      out.stages.push_back(optimize_domain(initial.quality.inverted));
+      out.volume_skipped_for = elements_on_uncertified_faces();
+      if (out.volume_skipped_for.empty()) {
+        out.stages.push_back(optimize_domain(initial.quality.inverted));
+      } else {
+        final_ = std::move(q0);
+        say("volume stage skipped: " + std::to_string(out.volume_skipped_for.size()) +
+            " elements have a boundary triangle not certified valid on its CAD face (the result is invalid; "
+            "another try follows)");
+      }
     }
     out.element_quality = final_.qualities();
     out.element_scaled_jacobian = final_.scaled_jacobians();
@@ -287,8 +295,8 @@ class Pipeline {
     for (std::size_t e = 0; e < final_.elements.size(); ++e) out.element_valid[e] = final_.elements[e].valid;
     out.inverted = out.stages.back().quality.inverted;
     out.conformity = check_on_cad<Family, SpaceDim>(mesh_, cad_, o_.tolerance * cad_.size());
-    out.valid = out.inverted == 0 && out.conformity.ok;
-    if (o_.certify) {
+    out.valid = out.inverted == 0 && out.conformity.ok && out.volume_skipped_for.empty();
+    if (o_.certify && out.volume_skipped_for.empty()) {
       if constexpr (surface) certification_ = face_certification_;
       if (!certification_) certification_ = certification_outcome(std::vector<ElementCertificate<PF>>{}, RepairStop::certified);
       const auto& c = *certification_;
@@ -297,6 +305,18 @@ class Pipeline {
       out.certification = std::move(certification_);
     }
     out.mesh = std::move(mesh_);
+  }
+
+  /// With CurveOptions::skip_volume_if_faces_uncertified, the elements of a
+  /// volume mesh whose boundary triangles the CAD faces' stage left
+  /// uncertified (ascending, each once); empty when the volume stage runs.
+  std::vector<int> elements_on_uncertified_faces() const {
+    if (!volume || !o_.skip_volume_if_faces_uncertified || !face_certification_ ||
+        face_certification_->certified())
+      return {};
+    std::vector<int> elements = face_certification_->uncertified;  // element numbers (merge_face_certificate)
+    elements.erase(std::unique(elements.begin(), elements.end()), elements.end());  // sorted by add()
+    return elements;
   }
 
   CertifyOptions certify_options() const {

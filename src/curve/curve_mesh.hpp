@@ -107,6 +107,15 @@ struct CurveOptions {
   bool certify = false;
   int certify_depth = CertifyOptions{}.max_depth;      ///< subdivision levels before "undecided"
   int certify_rounds = CertifyRepairOptions{}.max_rounds;  ///< repair rounds at most (0: certify only)
+  /// With certify, a volume mesh: when the CAD faces' stage leaves some
+  /// boundary triangle not certified valid, skip the volume stage and return
+  /// the result invalid (CurveResult::volume_skipped_for). Such a tetrahedron
+  /// has its face folded against the CAD surface's normal, and in every run
+  /// measured (wing_fuselage.step, p = 4 and 5) the volume stage's
+  /// uncertified elements were exactly those on such triangles, after up to
+  /// 30 min of optimization. Set by --refine-invalid while tries remain: the
+  /// next try meshes the model finer there at once.
+  bool skip_volume_if_faces_uncertified = false;
 };
 
 /// One row of the statistics table.
@@ -147,8 +156,13 @@ struct CurveResult {
   std::optional<CertificationOutcome> certification;
   /// What the flat-corner split did to the linear mesh (CurveOptions::split_flat_corners).
   FlatCornerSplit flat_corners;
+  /// CurveOptions::skip_volume_if_faces_uncertified took effect: the volume
+  /// stage did not run (the mesh and its statistics are the initial curved
+  /// volume's, no certification), and these elements, ascending, have a
+  /// boundary triangle not certified valid on its CAD face. Empty otherwise.
+  std::vector<int> volume_skipped_for;
   /// inverted == 0 and conformity.ok, and with CurveOptions::certify every
-  /// element certified valid.
+  /// element certified valid; false when the volume stage was skipped.
   bool valid = false;
   double time_s = 0.0;               ///< whole pipeline (without the linear meshing)
 };

@@ -22,11 +22,12 @@ namespace hom::cad {
 
 /// Why a curve_mesh result is invalid (the first reason that applies).
 enum class Failure {
-  none,            ///< valid
-  inverted,        ///< det D phi <= 0 at a quadrature point of some element
-  off_cad,         ///< a boundary node off its CAD entity: no element to blame
-  uncertified,     ///< CurveOptions::certify: some element not certified valid
-  folded_at_node,  ///< det D phi <= 0 at a node: a fold at an element corner that no quadrature point sees
+  none,               ///< valid
+  faces_uncertified,  ///< CAD-face triangles not certified valid, the volume stage skipped (volume_skipped_for)
+  inverted,           ///< det D phi <= 0 at a quadrature point of some element
+  off_cad,            ///< a boundary node off its CAD entity: no element to blame
+  uncertified,        ///< CurveOptions::certify: some element not certified valid
+  folded_at_node,     ///< det D phi <= 0 at a node: a fold at an element corner that no quadrature point sees
 };
 
 struct FailingElements {
@@ -52,10 +53,14 @@ int count_folded_at_nodes(const CurveResult<MeshT>& r) {
   return n;
 }
 
-/// The elements that make `r` invalid, and why (the first reason that applies).
+/// The elements that make `r` invalid, and why (the first reason that
+/// applies). A result whose volume stage was skipped blames only the elements
+/// on the uncertified CAD faces: its other elements are the initial curved
+/// volume's, which the volume stage would have untangled.
 template <class MeshT>
 FailingElements failing_elements(const CurveResult<MeshT>& r) {
   FailingElements f;
+  if (!r.volume_skipped_for.empty()) return {Failure::faces_uncertified, r.volume_skipped_for};
   const bool uncertified = r.certification && !r.certification->certified();
   const int folded = count_folded_at_nodes(r);
   if (r.valid && !uncertified && folded == 0) return f;

@@ -60,16 +60,15 @@ inline double peak_rss_mb() {
 inline constexpr int failing_elements_listed = 5;
 
 /// Names the failing elements of an invalid result so that a user can find
-/// them: up to `limit` of `elements`, the least scaled Jacobian first, each
+/// them: up to failing_elements_listed of `elements`, the least scaled Jacobian first, each
 /// with its index in the mesh (the linear mesh's element order), centroid,
 /// quality, scaled Jacobian and where its nodes are: interior nodes move
 /// freely, nodes on a CAD face slide on it, nodes on CAD edges and vertices
 /// stay (a fold that only held nodes determine cannot be undone).
 template <class MeshT>
-void print_failing_elements(const cad::CurveResult<MeshT>& r, std::vector<int> elements,
-                            int limit = failing_elements_listed) {
+void print_failing_elements(const cad::CurveResult<MeshT>& r, std::vector<int> elements) {
   // The worst first (least scaled Jacobian), the ones a user looks at.
-  const int listed = std::min(limit, int(elements.size()));
+  const int listed = std::min(failing_elements_listed, int(elements.size()));
   const auto& sj = r.element_scaled_jacobian;
   std::partial_sort(elements.begin(), elements.begin() + listed, elements.end(),
                     [&](int a, int b) { return std::pair(sj[a], a) < std::pair(sj[b], b); });
@@ -181,6 +180,12 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
   if (!valid) {
     const int n = int(failing.elements.size());
     switch (failing.why) {
+      case cad::Failure::faces_uncertified:
+        std::fprintf(stderr,
+                     "hom: %s: NOT CERTIFIED: %d elements have a boundary triangle not certified valid on its CAD "
+                     "face, so the volume stage was skipped for another try; no mesh written\n",
+                     cmd, n);
+        break;
       case cad::Failure::inverted:
         std::fprintf(stderr, "hom: %s: INVALID result: %d of %d elements inverted after optimization; no mesh "
                      "written\n", cmd, r.inverted, r.mesh.num_elements());
@@ -201,12 +206,14 @@ int curve_and_write(const cad::CadModel& cad, const MeshT& input, const CadComma
                      cmd, n);
     }
     if (failing.why != cad::Failure::folded_at_node && n > 0) {
-      const std::string worst = n > failing_elements_listed
-                                    ? ", the " + std::to_string(failing_elements_listed) +
-                                          " with the least scaled Jacobian"
-                                    : "";
-      std::fprintf(stderr, "  %d elements fail in all (inverted, not certified or folded at a node)%s:\n", n,
-                   worst.c_str());
+      const char* why = failing.why == cad::Failure::faces_uncertified
+                            ? "on uncertified CAD faces"
+                            : "inverted, not certified or folded at a node";
+      if (n > failing_elements_listed)
+        std::fprintf(stderr, "  %d elements fail in all (%s), the %d with the least scaled Jacobian:\n", n, why,
+                     failing_elements_listed);
+      else
+        std::fprintf(stderr, "  %d elements fail in all (%s):\n", n, why);
     }
     print_failing_elements(r, failing.elements);
     if (retry) *retry = cad::balls_around(r.mesh, failing.elements);

@@ -60,6 +60,9 @@
 // thinner than the elements there), this is what makes the result valid.
 // Balls finer than --size-min with --size-curvature keep the first mesh's
 // sizes elsewhere, as --size-ball does (refine_invalid.hpp's refine_around).
+// With --certify, a try whose CAD faces are left uncertified skips its
+// volume stage while tries remain (CurveOptions::skip_volume_if_faces_uncertified):
+// the volume would not be certified either, and the next try refines there.
 //
 // Exit status: 0 valid mesh written; 3 the result is invalid (nothing
 // written); 1 unreadable model or mesh, meshing failure, I/O error; 2 bad
@@ -456,8 +459,10 @@ int run(int argc, char** argv) {
     auto linear = mesh_model(model, m);
     for (int attempt = 0;; ++attempt) {
       const bool last = attempt == o.refine_invalid;
+      hom::tools::CadCommandOptions this_try = co;
+      this_try.curve.skip_volume_if_faces_uncertified = !last;  // the next try mends a face sooner (curve_mesh.hpp)
       std::vector<hom::cad::LocalSize> balls;
-      const int status = hom::tools::curve_and_write(model, linear, co, elapsed(), last ? nullptr : &balls);
+      const int status = hom::tools::curve_and_write(model, linear, this_try, elapsed(), last ? nullptr : &balls);
       if (last || balls.empty()) return status;
       const double floor = hom::cad::size_floor(m);  // before the new balls
       const bool kept_sizes = hom::cad::refine_around(m, balls, linear);
