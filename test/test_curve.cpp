@@ -136,15 +136,21 @@ int check_gll_on_holes(const MeshT& mesh, int p) {
   return edges;
 }
 
-}  // namespace
-
-TEST_CASE("curved cube with a spherical cavity at p = 2 and 3: valid, boundary on the CAD") {
-  const auto m = cad::cube_with_cavity_model();
+// The cube with a spherical cavity meshed at size 1.62, 0.3 at the cavity's
+// vertices.
+cad::CurvedMesh<Simplex<3>, 3> cavity_mesh(const cad::CadModel& m) {
   cad::CadMeshOptions mo;
   mo.size = 1.62;
   for (int v = 1; v <= m.num_vertices(); ++v)
     mo.vertex_sizes[v] = (m.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.3 : 1.62;
-  const auto linear = cad::mesh_cad<Simplex<3>>(m, mo);
+  return cad::mesh_cad<Simplex<3>>(m, mo);
+}
+
+}  // namespace
+
+TEST_CASE("curved cube with a spherical cavity at p = 2 and 3: valid, boundary on the CAD") {
+  const auto m = cad::cube_with_cavity_model();
+  const auto linear = cavity_mesh(m);
   auto split = linear;  // what the pipeline curves (flat corners split)
   split_flat_corners(split);
   for (int p : {2, 3}) {
@@ -500,11 +506,7 @@ TEST_CASE("certify: a surface element folded in its face's (u, v) is certified i
 
 TEST_CASE("skip_volume_if_faces_uncertified: a CAD-face triangle folded, the volume stage skipped, its element blamed") {
   const auto m = cad::cube_with_cavity_model();
-  cad::CadMeshOptions mo;
-  mo.size = 1.62;
-  for (int v = 1; v <= m.num_vertices(); ++v)
-    mo.vertex_sizes[v] = (m.vertex(v) - Eigen::Vector3d::Constant(2.5)).norm() < 1.0 ? 0.3 : 1.62;
-  const auto linear = cad::mesh_cad<Simplex<3>>(m, mo);
+  const auto linear = cavity_mesh(m);
   const auto curved = cad::curve_mesh<Simplex<3>, 3>(m, linear, options(3));
   REQUIRE(curved.valid);
   cad::CurveOptions o = options(3);
