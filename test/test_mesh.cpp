@@ -805,3 +805,78 @@ TEST_CASE("split_flat_corners: a corner whose boundary edges turn the other way 
   CHECK(mesh.boundary_facets().size() == facets);
   check_facet_owners(mesh);
 }
+
+TEST_CASE("split_flat_corners: a corner on entities with no common tangent plane is split where it folds") {
+  // The star of a wing tip's leading-edge vertex v (hom curve on
+  // wing_fuselage.step at p = 4: the fold left after the volume stage, in
+  // its coordinates relative to v): the tip face (y = 0, normal y) meets the
+  // wing at a right angle, and the wing's upper and lower faces meet
+  // tangentially along the leading edge (normal x for both). Edge v-k lies
+  // on the tip's airfoil curve (facets on the tip and the upper face), so
+  // curved it leaves v along the curve's tangent, z = x x y; edge v-l lies
+  // on the lower face, so it leaves v in the plane x = 0. The faces at v
+  // have no common tangent plane, yet both edges end in the wing's, and
+  // (v, d, l, k) with its third edge v-d interior folds at v once curved.
+  Eigen::Matrix3Xd x(3, 8);
+  x << 0, 5.95, 8.16, 7.16, 4.14, 0, 18.63, 28.12,  // v d l k upper seam tip tip_curve
+      0, 10.54, 10.56, 0, 10.67, 14.26, 0, 0,       //
+      0, 1.7, -4.3, 11.07, 8.77, 0, 5.59, -2.56;
+  const int v = 0, d = 1, l = 2, k = 3, upper = 4, seam = 5, tip = 6, tip_curve = 7;
+  auto mesh = tetrahedra_with_boundary(x, {{v, l, tip, tip_curve}, {v, k, l, tip}, {v, upper, d, k},
+                                           {v, upper, d, seam}, {v, d, l, k}, {v, d, l, seam}});
+  const int upper_face = 1, lower_face = 2, tip_face = 3;
+  auto facet_is = [](const BoundaryFacet<Simplex<3>>& f, std::set<int> nodes) {
+    return std::set<int>(f.vertices.begin(), f.vertices.end()) == nodes;
+  };
+  for (auto& f : mesh.boundary_facets()) {
+    f.entity_tag += 10;  // the star's outer facets: entities of their own
+    if (facet_is(f, {v, upper, k}) || facet_is(f, {v, upper, seam})) f.entity_tag = upper_face;
+    if (facet_is(f, {v, l, tip_curve}) || facet_is(f, {v, l, seam})) f.entity_tag = lower_face;
+    if (facet_is(f, {v, tip, tip_curve}) || facet_is(f, {v, k, tip})) f.entity_tag = tip_face;
+  }
+  const auto on_boundary = detail::boundary_edge_facets(mesh);
+  REQUIRE(!on_boundary.count(detail::mesh_edge(v, d)));
+  REQUIRE(detail::interior_face(mesh.boundary_facets(), on_boundary, v, l, k));
+  auto normals = [&](bool tip_normal) {
+    return EntityNormal<3>([=](int tag, int node) -> std::optional<Eigen::Vector3d> {
+      if (node != v) return std::nullopt;
+      if (tag == upper_face || tag == lower_face) return Eigen::Vector3d(-1, 0, 0);
+      if (tag == tip_face && tip_normal) return Eigen::Vector3d(0, -1, 0);
+      return std::nullopt;
+    });
+  };
+  auto corners_at_v = [&](const Mesh<Simplex<3>>& m, const EntityNormal<3>& n) {
+    std::vector<FlatCorner> out;
+    for (const auto& c : find_flat_corners(m, n))
+      if (m.vertex(c.element, c.vertex) == v) out.push_back(c);
+    return out;
+  };
+  // The claim, from the curved directions: z along v-k, v-l's chord without
+  // its x component; v-d straight.
+  auto element_nodes = [&](const FlatCorner& c) {
+    std::set<int> s;
+    for (int i = 0; i < 4; ++i) s.insert(mesh.vertex(c.element, i));
+    return s;
+  };
+  const Eigen::Vector3d along_k(0, 0, 1), along_l = Eigen::Vector3d(0, x(1, l), x(2, l)).normalized();
+  const double linear = Eigen::Vector3d(x.col(l)).cross(Eigen::Vector3d(x.col(k))).dot(x.col(d));
+  CHECK(linear * along_l.cross(along_k).dot(x.col(d)) < 0);
+
+  const auto corners = corners_at_v(mesh, normals(true));
+  REQUIRE(corners.size() == 1);  // the other tetrahedra at v keep their orientation
+  CHECK(element_nodes(corners.front()) == std::set<int>{v, d, l, k});
+  CHECK(std::set<int>{mesh.vertex(corners.front().element, corners.front().split_from),
+                      mesh.vertex(corners.front().element, corners.front().split_to)} == std::set<int>{l, k});
+  CHECK(corners_at_v(mesh, normals(false)).empty());  // no tip normal: the curve's tangent is unknown
+
+  const double volume = total_volume(mesh);
+  const std::size_t facets = mesh.boundary_facets().size();
+  const auto s = split_flat_corners(mesh, normals(true));
+  CHECK(s.faces_split == 1);  // l-k is on the star's outer facet (k, l, tip): face v-l-k is split
+  CHECK(mesh.num_elements() == 6 + 4);
+  CHECK(corners_at_v(mesh, normals(true)).empty());
+  for (int e = 0; e < mesh.num_elements(); ++e) CHECK(signed_volume(mesh, e) > 0);
+  CHECK(total_volume(mesh) == doctest::Approx(volume));
+  CHECK(mesh.boundary_facets().size() == facets);
+  check_facet_owners(mesh);
+}

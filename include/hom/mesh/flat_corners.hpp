@@ -109,6 +109,17 @@ Eigen::Matrix<double, D, 1> facet_normal(const Mesh<Simplex<D>, Nodes, D>& mesh,
 /// between them is split if it is interior, else the face (vertex,
 /// split_from, split_to), which is then interior, at its centre. Either
 /// leaves each new element at the corner with one edge on the boundary.
+///
+/// The two boundary edges may also lie on entities with no common tangent
+/// plane, as at a wing tip's leading edge, where the tip face meets the
+/// wing at a right angle and the wing's upper and lower faces meet
+/// tangentially: there each edge's curved direction is taken alone (its
+/// chord projected onto its entity's tangent plane, or the tangent line of
+/// the curve between its two entities, n1 x n2), and a corner whose two
+/// directions turn the other way round than the chords is a straight corner
+/// too (an edge on the tip's airfoil curve, along the leading edge, and one
+/// on the lower face, both in the wing's tangent plane, with the third edge
+/// interior).
 struct FlatCorner {
   int element = 0;
   int vertex = 0;
@@ -168,6 +179,29 @@ std::optional<Eigen::Matrix<double, D, 1>> tangent_normal(const std::vector<Boun
   return normals.front();
 }
 
+/// The direction in which a boundary edge leaves mesh node `node` once curved
+/// (see FlatCorner): its chord projected onto the tangent plane of the
+/// entities of its facets `around` where they have one there, else the
+/// tangent line of the curve between its two entities (n1 x n2), oriented
+/// along the chord; empty where a normal is missing or more than two
+/// entities meet at an angle.
+inline std::optional<Eigen::Vector3d> curved_edge_direction(const std::vector<BoundaryFacet<Simplex<3>>>& facets,
+                                                            const std::vector<int>& around, int node,
+                                                            const Eigen::Vector3d& chord,
+                                                            const EntityNormal<3>& normal, double min_cos) {
+  if (const auto n = tangent_normal(facets, around, node, normal, min_cos))
+    return Eigen::Vector3d(chord - chord.dot(*n) * *n).normalized();
+  std::vector<int> entities;
+  for (int k : around) entities.push_back(facets[k].entity_tag);
+  std::sort(entities.begin(), entities.end());
+  entities.erase(std::unique(entities.begin(), entities.end()), entities.end());
+  if (entities.size() != 2) return std::nullopt;
+  const auto n1 = normal(entities[0], node), n2 = normal(entities[1], node);
+  if (!n1 || !n2) return std::nullopt;
+  const Eigen::Vector3d t = n1->cross(*n2).normalized();  // not parallel: tangent_normal found no common plane
+  return chord.dot(t) < 0.0 ? Eigen::Vector3d(-t) : t;
+}
+
 /// Whether mesh nodes a, b, c make a face that is not a boundary facet (so
 /// two tetrahedra share it): either b-c is interior, or none of its facets
 /// has a.
@@ -190,22 +224,33 @@ std::optional<FlatCorner> straight_corner(const Mesh<Simplex<3>, Nodes, 3>& mesh
   const auto& facets = mesh.boundary_facets();
   const int node = mesh.vertex(e, a);
   std::vector<int> ends, around;  // local vertices b with a-b on the boundary, their facets
+  std::vector<std::vector<int>> edge_facets;
   for (int b = 0; b <= 3; ++b) {
     if (b == a) continue;
     const auto it = on_boundary.find(mesh_edge(node, mesh.vertex(e, b)));
     if (it == on_boundary.end()) continue;
     ends.push_back(b);
+    edge_facets.push_back(it->second);
     around.insert(around.end(), it->second.begin(), it->second.end());
   }
   if (ends.size() != 2) return std::nullopt;  // three: a flat corner of the first kind, if any
   const int b = ends[0], c = ends[1], d = 6 - a - b - c;
   if (!interior_face(facets, on_boundary, node, mesh.vertex(e, b), mesh.vertex(e, c))) return std::nullopt;
-  const auto tangent = tangent_normal(facets, around, node, normal, min_cos);
-  if (!tangent) return std::nullopt;
-  const Eigen::Vector3d n = *tangent;
   auto chord = [&](int k) -> Eigen::Vector3d { return mesh.node(mesh.vertex(e, k)) - mesh.node(node); };
-  auto in_plane = [&](int k) -> Eigen::Vector3d { return (chord(k) - chord(k).dot(n) * n).normalized(); };
-  const Eigen::Vector3d u = in_plane(b), v = in_plane(c);  // the curved edges' directions at the corner
+  // The curved edges' directions at the corner: in the entities' common
+  // tangent plane where there is one, else each edge's own (see FlatCorner).
+  Eigen::Vector3d u, v;
+  if (const auto tangent = tangent_normal(facets, around, node, normal, min_cos)) {
+    const Eigen::Vector3d n = *tangent;
+    u = (chord(b) - chord(b).dot(n) * n).normalized();
+    v = (chord(c) - chord(c).dot(n) * n).normalized();
+  } else {
+    const auto ub = curved_edge_direction(facets, edge_facets[0], node, chord(b), normal, min_cos);
+    const auto vc = curved_edge_direction(facets, edge_facets[1], node, chord(c), normal, min_cos);
+    if (!ub || !vc) return std::nullopt;
+    u = *ub;
+    v = *vc;
+  }
   const bool straight = u.dot(v) <= -min_cos;
   const double linear = chord(b).cross(chord(c)).dot(chord(d));
   const double curved = u.cross(v).dot(chord(d));
