@@ -285,8 +285,7 @@ class Pipeline {
       } else {
         final_ = std::move(q0);
         say("volume stage skipped: " + std::to_string(out.volume_skipped_for.size()) +
-            " elements have a boundary triangle not certified valid on its CAD face (the result is invalid; "
-            "another try follows)");
+            " elements have a boundary triangle not certified valid on its CAD face (the result is invalid)");
       }
     }
     out.element_quality = final_.qualities();
