@@ -153,6 +153,11 @@ FULL = [
          timeout=4 * 3600,
          conditions="an invalid or uncertified result meshed again finer around its failing elements, up to 3 "
                     "times (--refine-invalid 3; the statistics are the last mesh's)"),
+    dict(name="curve_wing_merged", binary="bench_curve",
+         args=["--case", "wing_fuselage_merged", "--certify", "--refine-invalid", "3"], timeout=3600,
+         conditions="wing_fuselage.step without the wing roots' two 0.036-long CAD edges (36 CAD edges instead of "
+                    "38, hom curve --merge-small-edges 0.05) at p = 2 to 5; an invalid or uncertified result meshed "
+                    "again finer around its failing elements, up to 3 times"),
     dict(name="curve_peer", binary="bench_curve",
          args=["--case", "ring_in_sphere", "--case", "spur_gear", "--p", "2,3,4,5", "--certify", "--threads", "1",
                "--optimizer-peer", "gmsh", "--peer-timeout", "1800"], timeout=4 * 3600, role="peer",
@@ -1215,7 +1220,7 @@ def performance_section(reports, runs, out_dir, full):
 # The report
 # ---------------------------------------------------------------------------------------------
 
-CURVE_RUNS = ("curve", "curve_plate", "curve_cube", "curve_p10", "curve_models", "curve_cad")
+CURVE_RUNS = ("curve", "curve_plate", "curve_cube", "curve_p10", "curve_models", "curve_cad", "curve_wing_merged")
 
 
 def cad_cases_section(reports):
