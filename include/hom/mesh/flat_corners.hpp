@@ -76,8 +76,8 @@ Eigen::Matrix<double, D, 1> facet_normal(const Mesh<Simplex<D>, Nodes, D>& mesh,
     const Eigen::Vector2d t = mesh.node(f.vertices[1]) - mesh.node(f.vertices[0]);
     return Eigen::Vector2d(-t[1], t[0]).normalized();
   } else {
-    const Eigen::Vector3d x0 = mesh.node(f.vertices[0]);
-    return (Eigen::Vector3d(mesh.node(f.vertices[1])) - x0).cross(Eigen::Vector3d(mesh.node(f.vertices[2])) - x0).normalized();
+    const Eigen::Vector3d x0 = mesh.node(f.vertices[0]), x1 = mesh.node(f.vertices[1]), x2 = mesh.node(f.vertices[2]);
+    return (x1 - x0).cross(x2 - x0).normalized();
   }
 }
 
@@ -158,47 +158,56 @@ bool nearly_parallel(const std::vector<Eigen::Matrix<double, D, 1>>& normals, do
   return true;
 }
 
+/// The normals at mesh node `node` of the entities of the facets `around`,
+/// by entity tag, each evaluated once (a projection onto a CAD surface);
+/// empty where one has none.
+template <int D>
+std::optional<std::map<int, Eigen::Matrix<double, D, 1>>> entity_normals(
+    const std::vector<BoundaryFacet<Simplex<D>>>& facets, const std::vector<int>& around, int node,
+    const EntityNormal<D>& normal) {
+  std::map<int, Eigen::Matrix<double, D, 1>> normals;
+  for (int k : around) {
+    const int t = facets[k].entity_tag;
+    if (normals.count(t)) continue;
+    const auto n = normal(t, node);
+    if (!n) return std::nullopt;
+    normals.emplace(t, *n);
+  }
+  return normals;
+}
+
+/// The common tangent plane's normal of entities with these normals: the
+/// first one when all are nearly parallel, nothing otherwise.
+template <int D>
+std::optional<Eigen::Matrix<double, D, 1>> common_normal(const std::map<int, Eigen::Matrix<double, D, 1>>& normals,
+                                                         double min_cos) {
+  std::vector<Eigen::Matrix<double, D, 1>> all;
+  for (const auto& [tag, n] : normals) all.push_back(n);
+  if (all.empty() || !nearly_parallel(all, min_cos)) return std::nullopt;
+  return all.front();
+}
+
 /// The common tangent plane's normal at mesh node `node` of the entities of
-/// the facets `around`: the first entity's normal when all their normals are
-/// nearly parallel there, nothing otherwise (or where one has none).
+/// the facets `around` (see common_normal; nothing where one has no normal).
 template <int D>
 std::optional<Eigen::Matrix<double, D, 1>> tangent_normal(const std::vector<BoundaryFacet<Simplex<D>>>& facets,
                                                           const std::vector<int>& around, int node,
                                                           const EntityNormal<D>& normal, double min_cos) {
-  std::vector<int> entities;
-  for (int k : around) entities.push_back(facets[k].entity_tag);
-  std::sort(entities.begin(), entities.end());
-  entities.erase(std::unique(entities.begin(), entities.end()), entities.end());
-  std::vector<Eigen::Matrix<double, D, 1>> normals;
-  for (int t : entities) {
-    const auto n = normal(t, node);
-    if (!n) return std::nullopt;
-    normals.push_back(*n);
-  }
-  if (normals.empty() || !nearly_parallel(normals, min_cos)) return std::nullopt;
-  return normals.front();
+  const auto normals = entity_normals(facets, around, node, normal);
+  return normals ? common_normal(*normals, min_cos) : std::nullopt;
 }
 
-/// The direction in which a boundary edge leaves mesh node `node` once curved
-/// (see FlatCorner): its chord projected onto the tangent plane of the
-/// entities of its facets `around` where they have one there, else the
-/// tangent line of the curve between its two entities (n1 x n2), oriented
-/// along the chord; empty where a normal is missing or more than two
-/// entities meet at an angle.
-inline std::optional<Eigen::Vector3d> curved_edge_direction(const std::vector<BoundaryFacet<Simplex<3>>>& facets,
-                                                            const std::vector<int>& around, int node,
-                                                            const Eigen::Vector3d& chord,
-                                                            const EntityNormal<3>& normal, double min_cos) {
-  if (const auto n = tangent_normal(facets, around, node, normal, min_cos))
-    return Eigen::Vector3d(chord - chord.dot(*n) * *n).normalized();
-  std::vector<int> entities;
-  for (int k : around) entities.push_back(facets[k].entity_tag);
-  std::sort(entities.begin(), entities.end());
-  entities.erase(std::unique(entities.begin(), entities.end()), entities.end());
-  if (entities.size() != 2) return std::nullopt;
-  const auto n1 = normal(entities[0], node), n2 = normal(entities[1], node);
-  if (!n1 || !n2) return std::nullopt;
-  const Eigen::Vector3d t = n1->cross(*n2).normalized();  // not parallel: tangent_normal found no common plane
+/// The direction in which a boundary edge leaves a corner once curved (see
+/// FlatCorner), from the normals there of the entities of its facets: its
+/// chord projected onto their common tangent plane where they have one, else
+/// the tangent line of the curve between its two entities (n1 x n2),
+/// oriented along the chord; empty where more than two entities meet at an
+/// angle.
+inline std::optional<Eigen::Vector3d> curved_edge_direction(const std::map<int, Eigen::Vector3d>& normals,
+                                                            const Eigen::Vector3d& chord, double min_cos) {
+  if (const auto n = common_normal(normals, min_cos)) return Eigen::Vector3d(chord - chord.dot(*n) * *n).normalized();
+  if (normals.size() != 2) return std::nullopt;
+  const Eigen::Vector3d t = normals.begin()->second.cross(normals.rbegin()->second).normalized();  // not parallel
   return chord.dot(t) < 0.0 ? Eigen::Vector3d(-t) : t;
 }
 
@@ -239,14 +248,21 @@ std::optional<FlatCorner> straight_corner(const Mesh<Simplex<3>, Nodes, 3>& mesh
   auto chord = [&](int k) -> Eigen::Vector3d { return mesh.node(mesh.vertex(e, k)) - mesh.node(node); };
   // The curved edges' directions at the corner: in the entities' common
   // tangent plane where there is one, else each edge's own (see FlatCorner).
+  const auto normals = entity_normals(facets, around, node, normal);
+  if (!normals) return std::nullopt;
   Eigen::Vector3d u, v;
-  if (const auto tangent = tangent_normal(facets, around, node, normal, min_cos)) {
+  if (const auto tangent = common_normal(*normals, min_cos)) {
     const Eigen::Vector3d n = *tangent;
     u = (chord(b) - chord(b).dot(n) * n).normalized();
     v = (chord(c) - chord(c).dot(n) * n).normalized();
   } else {
-    const auto ub = curved_edge_direction(facets, edge_facets[0], node, chord(b), normal, min_cos);
-    const auto vc = curved_edge_direction(facets, edge_facets[1], node, chord(c), normal, min_cos);
+    auto of_edge = [&](const std::vector<int>& edge) {  // the normals of one edge's entities
+      std::map<int, Eigen::Vector3d> out;
+      for (int k : edge) out.emplace(facets[k].entity_tag, normals->at(facets[k].entity_tag));
+      return out;
+    };
+    const auto ub = curved_edge_direction(of_edge(edge_facets[0]), chord(b), min_cos);
+    const auto vc = curved_edge_direction(of_edge(edge_facets[1]), chord(c), min_cos);
     if (!ub || !vc) return std::nullopt;
     u = *ub;
     v = *vc;
