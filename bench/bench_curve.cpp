@@ -230,10 +230,7 @@ class Runner {
       try {
         auto linear = first_linear;
         double t_mesh = t_first_mesh;
-        auto first = o;
-        first.skip_volume_if_faces_uncertified = s_.refine_invalid > 0;  // tries remain (curve_mesh.hpp)
-        auto r = hom::cad::curve_mesh<F, S>(cad, linear, first);
-        const int tries = refine_invalid<F, S>(cad, mo, o, linear, t_mesh, r);
+        const auto [r, tries] = refine_invalid<F, S>(cad, mo, o, linear, t_mesh);
         report(c, cad, std::string(F::name), p, r.stages, t_mesh, tries);
         int corners = 0;
         for (double sj : r.element_scaled_jacobian) corners += !(sj > 0.0);
@@ -275,42 +272,49 @@ class Runner {
                                                                 : "";
   }
 
-  /// --refine-invalid N: while `r` is invalid and tries are left, the model is
-  /// meshed again finer around its failing elements (balls of the earlier
-  /// tries kept; src/curve/refine_invalid.hpp) and curved again, as hom
-  /// curve --refine-invalid does. `linear`, `t_mesh` and `r` become the last
-  /// try's. A try whose meshing fails (Gmsh) ends the tries with the last
-  /// curved one's result. A try with tries after it skips its volume stage
-  /// when its CAD faces are left uncertified (curve_mesh.hpp). Returns the
-  /// number of tries (1: the first mesh).
+  /// A curve_mesh result and the number of linear meshes it took (1: the first).
   template <hom::ElementFamily F, int S>
-  int refine_invalid(const hom::cad::CadModel& cad, hom::cad::CadMeshOptions mo, hom::cad::CurveOptions o,
-                     hom::cad::CurvedMesh<F, S>& linear, double& t_mesh,
-                     hom::cad::CurveResult<hom::cad::CurvedMesh<F, S>>& r) {
+  struct Tried {
+    hom::cad::CurveResult<hom::cad::CurvedMesh<F, S>> result;
     int tries = 1;
-    for (; tries <= s_.refine_invalid; ++tries) {
-      const auto failing = hom::cad::failing_elements(r);
-      if (failing.elements.empty()) break;
-      auto balls = hom::cad::balls_around(r.mesh, failing.elements);
-      hom::cad::refine_around(mo, balls, linear);  // outside the balls, maybe the first mesh's sizes
+  };
+
+  /// Curves `linear`; with --refine-invalid N, while the result is invalid
+  /// and tries are left, the model is meshed again finer around its failing
+  /// elements and curved again, as hom curve --refine-invalid does
+  /// (src/curve/refine_invalid.hpp's curve_refining_invalid). `linear` and
+  /// `t_mesh` become the last try's.
+  template <hom::ElementFamily F, int S>
+  Tried<F, S> refine_invalid(const hom::cad::CadModel& cad, hom::cad::CadMeshOptions mo,
+                             const hom::cad::CurveOptions& o, hom::cad::CurvedMesh<F, S>& linear, double& t_mesh) {
+    std::optional<hom::cad::CurveResult<hom::cad::CurvedMesh<F, S>>> r;
+    hom::cad::FailingElements failing;
+    auto curve = [&](const hom::cad::CurvedMesh<F, S>& mesh, bool last) {
+      auto this_try = o;
+      this_try.skip_volume_if_faces_uncertified = !last;
+      r = hom::cad::curve_mesh<F, S>(cad, mesh, this_try);
+      failing = hom::cad::failing_elements(*r);
+      return hom::cad::balls_around(r->mesh, failing.elements);
+    };
+    auto remesh = [&](const hom::cad::Refinement& next) -> std::optional<hom::cad::CurvedMesh<F, S>> {
       const auto t0 = std::chrono::steady_clock::now();
       try {
-        linear = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, mo);
+        auto mesh = hom::cad::mesh_cad<F, hom::WarpBlend, S>(cad, next.options);
+        t_mesh = hom::bench::seconds_since(t0);
+        std::printf("   p = %d: %d elements fail%s; try %d: the model meshed again finer around them (size floor "
+                    "%.3g), %d elements, %d nodes (Gmsh, %.2f s)\n",
+                    o.p, int(failing.elements.size()), skipped(failing), next.next_try,
+                    hom::cad::size_floor(next.options), mesh.num_elements(), mesh.num_nodes(), t_mesh);
+        std::fflush(stdout);
+        return mesh;
       } catch (const hom::cad::MeshingError& e) {
         std::printf("   p = %d: %d elements fail%s; try %d: meshing failed (%s); the result stands at try %d's\n", o.p,
-                    int(failing.elements.size()), skipped(failing), tries + 1, e.what(), tries);
-        break;
+                    int(failing.elements.size()), skipped(failing), next.next_try, e.what(), next.next_try - 1);
+        return std::nullopt;
       }
-      t_mesh = hom::bench::seconds_since(t0);
-      std::printf("   p = %d: %d elements fail%s; try %d: the model meshed again finer around them (size floor %.3g), "
-                  "%d elements, %d nodes (Gmsh, %.2f s)\n",
-                  o.p, int(failing.elements.size()), skipped(failing), tries + 1, hom::cad::size_floor(mo),
-                  linear.num_elements(), linear.num_nodes(), t_mesh);
-      std::fflush(stdout);
-      o.skip_volume_if_faces_uncertified = tries < s_.refine_invalid;  // another try after this one
-      r = hom::cad::curve_mesh<F, S>(cad, linear, o);
-    }
-    return tries;
+    };
+    const int tries = hom::cad::curve_refining_invalid(mo, linear, s_.refine_invalid, curve, remesh);
+    return {std::move(*r), tries};
   }
 
   /// Issue 8's cross-check on the CAD cases: Gmsh's Plugin(AnalyseMeshQuality)
@@ -521,7 +525,9 @@ std::vector<Case> all_cases(const fs::path& data) {
   cases.push_back({"cone", [] { return hom::cad::cone_model(3.0, 10.0); }, Kind::volume,
                    [](const hom::cad::CadModel&) { return sized(0.5); }, {3, 5}, {3}, {}});
   // Real CAD (../shared/data/cad), default sizes (model size / 20) unless noted.
-  auto file = [data](const std::string& f) { return [path = (data / f).string()] { return hom::cad::read_cad(path); }; };
+  auto file = [data](const std::string& f, hom::cad::CadReadOptions read = {}) {
+    return [path = (data / f).string(), read] { return hom::cad::read_cad(path, read); };
+  };
   auto relative = [](double fraction, int curvature = 0) {
     return [fraction, curvature](const hom::cad::CadModel& m) { return sized(fraction * m.size(), curvature); };
   };
@@ -537,11 +543,8 @@ std::vector<Case> all_cases(const fs::path& data) {
     // edges instead of 38; `hom curve --merge-small-edges 0.05`): every model
     // vertex is a mesh node, and elements with a 0.018 edge beside 5 to 10
     // long ones at the roots took most of the unmerged model's tries at p >= 3.
-    cases.push_back({"wing_fuselage_merged",
-                     [path = (data / "wing_fuselage.step").string()] {
-                       return hom::cad::read_cad(path, {.merge_small_edges = 0.05});
-                     },
-                     Kind::volume, graded_by_curvature, {2, 3, 4, 5}, {2}, {}});
+    cases.push_back({"wing_fuselage_merged", file("wing_fuselage.step", {.merge_small_edges = 0.05}), Kind::volume,
+                     graded_by_curvature, {2, 3, 4, 5}, {2}, {}});
     // ring_in_sphere, graded: size 1/70 of the model's at the ring's vertices
     // (those well inside the sphere). At the default size one element edge
     // spans a fillet of the ring (radius 5, against elements of 30 to 65), and

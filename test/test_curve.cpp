@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -442,6 +443,78 @@ TEST_CASE("refine_around: the balls added; the earlier mesh's sizes kept only wh
   CHECK(elsewhere[0].size == balls[0].size);
 }
 
+TEST_CASE("curve_refining_invalid: tries until nothing fails, at most 1 + N, a failed meshing ends them") {
+  const auto m = cad::plate_with_holes_model();
+  const auto first = planar_triangles(m, 0.9);
+  const auto ball = cad::balls_around(first, {0});
+  using Linear = cad::CurvedMesh<Simplex<2>, 2>;
+  struct Log {
+    int tries = 0;
+    std::vector<int> curved, meshed;  // element counts of the meshes curved, and of those remeshed
+    std::vector<bool> last;
+    std::vector<int> next_try;
+    std::vector<std::size_t> balls_in_options;
+    int final_elements = 0;
+  };
+  // A curving that fails (one ball) on its first `failures` tries; meshing
+  // fails at try `meshing_fails_at`.
+  auto run = [&](int extra_tries, int failures, int meshing_fails_at) {
+    Log log;
+    cad::CadMeshOptions o;
+    auto linear = first;
+    auto curve = [&](const Linear& mesh, bool last) {
+      log.curved.push_back(mesh.num_elements());
+      log.last.push_back(last);
+      return int(log.last.size()) <= failures ? ball : std::vector<cad::LocalSize>{};
+    };
+    auto remesh = [&](const cad::Refinement& r) -> std::optional<Linear> {
+      log.next_try.push_back(r.next_try);
+      log.balls_in_options.push_back(r.options.local_sizes.size());
+      if (r.next_try == meshing_fails_at) return std::nullopt;
+      auto mesh = planar_triangles(m, 0.9 / r.next_try);
+      log.meshed.push_back(mesh.num_elements());
+      return mesh;
+    };
+    log.tries = cad::curve_refining_invalid(o, linear, extra_tries, curve, remesh);
+    log.final_elements = linear.num_elements();
+    return log;
+  };
+  SUBCASE("no tries after the first: it is the last") {
+    const auto log = run(0, 5, -1);
+    CHECK(log.tries == 1);
+    CHECK(log.last == std::vector<bool>{true});
+    CHECK(log.next_try.empty());
+  }
+  SUBCASE("valid on the second mesh: two tries, neither the last allowed") {
+    const auto log = run(3, 1, -1);
+    CHECK(log.tries == 2);
+    CHECK(log.last == std::vector<bool>{false, false});
+    CHECK(log.next_try == std::vector<int>{2});
+    CHECK(log.balls_in_options == std::vector<std::size_t>{1});
+    REQUIRE(log.meshed.size() == 1);
+    CHECK(log.curved == std::vector<int>{first.num_elements(), log.meshed[0]});
+    CHECK(log.final_elements == log.meshed[0]);
+  }
+  SUBCASE("never valid: 1 + N tries, the balls of each kept, only the last one last") {
+    const auto log = run(2, 5, -1);
+    CHECK(log.tries == 3);
+    CHECK(log.last == std::vector<bool>{false, false, true});
+    CHECK(log.next_try == std::vector<int>{2, 3});
+    CHECK(log.balls_in_options == std::vector<std::size_t>{1, 2});
+    REQUIRE(log.meshed.size() == 2);
+    CHECK(log.curved == std::vector<int>{first.num_elements(), log.meshed[0], log.meshed[1]});
+    CHECK(log.final_elements == log.meshed[1]);
+  }
+  SUBCASE("meshing fails at try 3: the tries end at try 2, whose mesh stays") {
+    const auto log = run(3, 5, 3);
+    CHECK(log.tries == 2);
+    CHECK(log.last == std::vector<bool>{false, false});
+    CHECK(log.next_try == std::vector<int>{2, 3});
+    REQUIRE(log.meshed.size() == 1);
+    CHECK(log.final_elements == log.meshed[0]);
+  }
+}
+
 // Two nodes on one face whose parameters are within a tenth of the face's
 // parameter box: no periodic seam between them.
 static bool near_in_parameters(const cad::CadModel& m, const NodeClass& a, const NodeClass& b) {
@@ -449,6 +522,45 @@ static bool near_in_parameters(const cad::CadModel& m, const NodeClass& a, const
   for (int k = 0; k < 2; ++k)
     if (std::abs(a.params[k] - b.params[k]) > 0.1 * (s.range(k).hi - s.range(k).lo)) return false;
   return true;
+}
+
+// A fold site: a face-interior node used by one element only (a surface
+// triangle's interior node, or at p = 3 the face node of a boundary
+// tetrahedron's triangle), on a CAD face, that `accept`s it, and a vertex of
+// its element on the same face, near it in parameters.
+struct FoldSite {
+  int element = -1, node = -1, vertex = -1;
+};
+
+template <class MeshT, class Accept>
+FoldSite fold_site(const cad::CadModel& m, const MeshT& mesh, Accept accept) {
+  std::vector<int> uses(mesh.num_nodes(), 0);
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    for (int i = 0; i < mesh.nodes_per_element(); ++i) ++uses[mesh.elements()(i, e)];
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    for (int i = 0; i < mesh.nodes_per_element(); ++i) {
+      const int g = mesh.elements()(i, e);
+      const auto& cl = mesh.node_class(g);
+      if (uses[g] != 1 || !cl.entity || cl.entity->dim != 2 || cl.num_params != 2 || !accept(g)) continue;
+      for (int v = 0; v <= MeshT::dim; ++v) {
+        const auto& cv = mesh.node_class(mesh.vertex(e, v));
+        if (cv.entity && cv.entity->dim == 2 && cv.entity->tag == cl.entity->tag && near_in_parameters(m, cl, cv))
+          return {e, g, mesh.vertex(e, v)};
+      }
+    }
+  return {};
+}
+
+// The mesh with the site's node pushed in (u, v) past its vertex, by half
+// their distance again: its element folds on the CAD face.
+template <class MeshT>
+MeshT folded_at(const cad::CadModel& m, MeshT mesh, const FoldSite& site) {
+  auto& cl = mesh.node_class(site.node);
+  const auto& cv = mesh.node_class(site.vertex);
+  const auto s = m.surface(cl.entity->tag);
+  for (int a = 0; a < 2; ++a) cl.params[a] = s.range(a).normalize(cv.params[a] + 1.5 * (cv.params[a] - cl.params[a]));
+  mesh.node(site.node) = s.evaluate({cl.params[0], cl.params[1]});
+  return mesh;
 }
 
 TEST_CASE("certify: a surface element folded in its face's (u, v) is certified invalid, the others valid") {
@@ -469,32 +581,11 @@ TEST_CASE("certify: a surface element folded in its face's (u, v) is certified i
   CHECK(good.valid);
 
   // The interior node of a triangle on a face, away from edges and poles,
-  // pushed in (u, v) past its element's first vertex: the element folds.
-  std::vector<int> uses(curved.mesh.num_nodes(), 0);
-  for (int e = 0; e < curved.mesh.num_elements(); ++e)
-    for (int i = 0; i < curved.mesh.nodes_per_element(); ++i) ++uses[curved.mesh.elements()(i, e)];
-  int element = -1, node = -1;
-  for (int e = 0; e < curved.mesh.num_elements() && element < 0; ++e)
-    for (int i = 0; i < curved.mesh.nodes_per_element(); ++i) {
-      const int g = curved.mesh.elements()(i, e);  // used once: the element's interior node
-      const auto& cl = curved.mesh.node_class(g);
-      const auto& c0 = curved.mesh.node_class(curved.mesh.vertex(e, 0));
-      if (uses[g] == 1 && cl.entity && cl.entity->dim == 2 && cl.num_params == 2 && c0.entity &&
-          c0.entity->dim == 2 && c0.entity->tag == cl.entity->tag && std::abs(curved.mesh.node(g).z()) < 0.3 &&
-          near_in_parameters(m, cl, c0)) {
-        element = e;
-        node = g;
-        break;
-      }
-    }
-  REQUIRE(element >= 0);
-  auto folded = curved.mesh;
-  auto& cl = folded.node_class(node);
-  const auto& c0 = folded.node_class(folded.vertex(element, 0));
-  const auto s = m.surface(cl.entity->tag);
-  for (int a = 0; a < 2; ++a)
-    cl.params[a] = s.range(a).normalize(c0.params[a] + 1.5 * (c0.params[a] - cl.params[a]));
-  folded.node(node) = s.evaluate({cl.params[0], cl.params[1]});
+  // pushed in (u, v) past a vertex of its element: the element folds.
+  const auto site = fold_site(m, curved.mesh, [&](int g) { return std::abs(curved.mesh.node(g).z()) < 0.3; });
+  REQUIRE(site.element >= 0);
+  const int element = site.element;
+  const auto folded = folded_at(m, curved.mesh, site);
   const auto bad = cad::optimize_on_cad<Simplex<2>, 3>(m, folded, o);
   REQUIRE(bad.certification);
   const auto& u = bad.certification->uncertified;
@@ -504,7 +595,7 @@ TEST_CASE("certify: a surface element folded in its face's (u, v) is certified i
   CHECK_FALSE(bad.valid);
 }
 
-TEST_CASE("skip_volume_if_faces_uncertified: a CAD-face triangle folded, the volume stage skipped, its element blamed") {
+TEST_CASE("skip_volume_if_faces_uncertified: a folded CAD-face triangle skips the volume stage, its element blamed") {
   const auto m = cad::cube_with_cavity_model();
   const auto linear = cavity_mesh(m);
   const auto curved = cad::curve_mesh<Simplex<3>, 3>(m, linear, options(3));
@@ -523,35 +614,12 @@ TEST_CASE("skip_volume_if_faces_uncertified: a CAD-face triangle folded, the vol
   // The face-interior node of a boundary triangle on one of the cube's planes
   // (at p = 3 used by one tetrahedron only), pushed in (u, v) past a vertex
   // of the triangle: the triangle folds on its CAD face.
-  std::vector<int> uses(curved.mesh.num_nodes(), 0);
-  for (int e = 0; e < curved.mesh.num_elements(); ++e)
-    for (int i = 0; i < curved.mesh.nodes_per_element(); ++i) ++uses[curved.mesh.elements()(i, e)];
-  int element = -1, node = -1, vertex = -1;
-  for (int e = 0; e < curved.mesh.num_elements() && element < 0; ++e)
-    for (int i = 0; i < curved.mesh.nodes_per_element() && element < 0; ++i) {
-      const int g = curved.mesh.elements()(i, e);
-      const auto& cl = curved.mesh.node_class(g);
-      if (uses[g] != 1 || !cl.entity || cl.entity->dim != 2 || cl.num_params != 2 ||
-          m.surface(cl.entity->tag).type() != "plane")
-        continue;
-      for (int v = 0; v < 4; ++v) {
-        const auto& cv = curved.mesh.node_class(curved.mesh.vertex(e, v));
-        if (cv.entity && cv.entity->dim == 2 && cv.entity->tag == cl.entity->tag && near_in_parameters(m, cl, cv)) {
-          element = e;
-          node = g;
-          vertex = curved.mesh.vertex(e, v);
-          break;
-        }
-      }
-    }
-  REQUIRE(element >= 0);
-  auto folded = curved.mesh;
-  auto& cl = folded.node_class(node);
-  const auto& cv = folded.node_class(vertex);
-  const auto s = m.surface(cl.entity->tag);
-  for (int a = 0; a < 2; ++a)
-    cl.params[a] = s.range(a).normalize(cv.params[a] + 1.5 * (cv.params[a] - cl.params[a]));
-  folded.node(node) = s.evaluate({cl.params[0], cl.params[1]});
+  const auto site = fold_site(m, curved.mesh, [&](int g) {
+    return m.surface(curved.mesh.node_class(g).entity->tag).type() == "plane";
+  });
+  REQUIRE(site.element >= 0);
+  const int element = site.element;
+  const auto folded = folded_at(m, curved.mesh, site);
 
   const auto skipped = cad::optimize_on_cad<Simplex<3>, 3>(m, folded, o);
   const auto& blamed = skipped.volume_skipped_for;

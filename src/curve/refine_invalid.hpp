@@ -13,6 +13,8 @@
 /// only where the curving failed.
 
 #include <algorithm>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "cad_mesher.hpp"
@@ -117,6 +119,40 @@ bool refine_around(CadMeshOptions& options, std::vector<LocalSize>& balls, const
   if (options.earlier_sizes.empty() && balls_lower_curvature_floor(options))
     options.earlier_sizes = size_map(earlier);
   return !options.earlier_sizes.empty();
+}
+
+/// What the next try of curve_refining_invalid meshes with: `options` with
+/// the new balls (refine_around), the size floor before them, and whether
+/// the first mesh's sizes are kept outside them.
+struct Refinement {
+  const CadMeshOptions& options;
+  const std::vector<LocalSize>& balls;
+  double floor_before = 0.0;
+  bool kept_sizes = false;
+  int next_try = 2;  ///< 1: the first mesh
+};
+
+/// The tries of --refine-invalid N (hom curve, bench_curve): `curve(linear,
+/// last)` curves the linear mesh and returns balls around its failing
+/// elements (balls_around; none where the result stands); the model is then
+/// meshed again finer in them by `remesh(refinement)`, which returns the new
+/// linear mesh, or nothing where the meshing failed (the result then stands
+/// at the last curved try's). A try with tries after it (`last` false) may
+/// skip its volume stage when its CAD faces are left uncertified: the next
+/// try mends a face sooner (CurveOptions::skip_volume_if_faces_uncertified).
+/// At most 1 + extra_tries tries; returns how many were made.
+template <class Linear, class Curve, class Remesh>
+int curve_refining_invalid(CadMeshOptions& options, Linear& linear, int extra_tries, Curve curve, Remesh remesh) {
+  for (int tries = 1;; ++tries) {
+    const bool last = tries > extra_tries;
+    auto balls = curve(static_cast<const Linear&>(linear), last);
+    if (last || balls.empty()) return tries;
+    const double floor = size_floor(options);  // before the new balls
+    const bool kept_sizes = refine_around(options, balls, linear);
+    std::optional<Linear> next = remesh(Refinement{options, balls, floor, kept_sizes, tries + 1});
+    if (!next) return tries;
+    linear = std::move(*next);
+  }
 }
 
 }  // namespace hom::cad

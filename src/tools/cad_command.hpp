@@ -60,11 +60,12 @@ inline double peak_rss_mb() {
 inline constexpr int failing_elements_listed = 5;
 
 /// Names the failing elements of an invalid result so that a user can find
-/// them: up to failing_elements_listed of `elements`, the least scaled Jacobian first, each
-/// with its index in the mesh (the linear mesh's element order), centroid,
-/// quality, scaled Jacobian and where its nodes are: interior nodes move
-/// freely, nodes on a CAD face slide on it, nodes on CAD edges and vertices
-/// stay (a fold that only held nodes determine cannot be undone).
+/// them: up to failing_elements_listed of `elements`, the least scaled
+/// Jacobian first, each with its index in the mesh (the linear mesh's element
+/// order), centroid, quality, scaled Jacobian and where its nodes are:
+/// interior nodes move freely, nodes on a CAD face slide on it, nodes on CAD
+/// edges and vertices stay (a fold that only held nodes determine cannot be
+/// undone).
 template <class MeshT>
 void print_failing_elements(const cad::CurveResult<MeshT>& r, std::vector<int> elements) {
   // The worst first (least scaled Jacobian), the ones a user looks at.

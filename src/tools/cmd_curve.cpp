@@ -457,25 +457,27 @@ int run(int argc, char** argv) {
   auto mesh_and_curve = [&](const hom::cad::CadModel& model, auto mesh_model) -> int {
     hom::cad::CadMeshOptions m = with_balls(model, mesh_model);
     auto linear = mesh_model(model, m);
-    for (int attempt = 0;; ++attempt) {
-      const bool last = attempt == o.refine_invalid;
+    int status = 0;
+    auto curve = [&](const auto& mesh, bool last) {
       hom::tools::CadCommandOptions this_try = co;
-      this_try.curve.skip_volume_if_faces_uncertified = !last;  // the next try mends a face sooner (curve_mesh.hpp)
+      this_try.curve.skip_volume_if_faces_uncertified = !last;
       std::vector<hom::cad::LocalSize> balls;
-      const int status = hom::tools::curve_and_write(model, linear, this_try, elapsed(), last ? nullptr : &balls);
-      if (last || balls.empty()) return status;
-      const double floor = hom::cad::size_floor(m);  // before the new balls
-      const bool kept_sizes = hom::cad::refine_around(m, balls, linear);
-      print_refinement(balls, floor, kept_sizes, attempt + 2, o.refine_invalid + 1);
+      status = hom::tools::curve_and_write(model, mesh, this_try, elapsed(), last ? nullptr : &balls);
+      return balls;
+    };
+    auto remesh = [&](const hom::cad::Refinement& r) -> std::optional<decltype(linear)> {
+      print_refinement(r.balls, r.floor_before, r.kept_sizes, r.next_try, o.refine_invalid + 1);
       t0 = std::chrono::steady_clock::now();
       try {
-        linear = mesh_model(model, m);
+        return mesh_model(model, r.options);
       } catch (const hom::cad::MeshingError& e) {
         std::fprintf(stderr, "hom: curve: try %d: %s; the result stands at try %d's (invalid, no mesh written)\n",
-                     attempt + 2, e.what(), attempt + 1);
-        return status;
+                     r.next_try, e.what(), r.next_try - 1);
+        return std::nullopt;
       }
-    }
+    };
+    hom::cad::curve_refining_invalid(m, linear, o.refine_invalid, curve, remesh);
+    return status;
   };
   if (cad.num_solids() > 0 && !o.surface) {
     if (o.quads) throw hom::tools::UsageError("curve: volume meshes are tetrahedral; --quads needs --surface");
